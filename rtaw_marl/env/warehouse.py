@@ -1,0 +1,293 @@
+"""# RTAW Warehouse (``rtaw_warehouse_v0``)
+
+Lifelong multi-robot task allocation in a warehouse grid (the RTAW paper's MDP) as a
+PettingZoo AEC environment. Whenever a robot becomes free it is the acting agent and
+picks one task from a queue of ``N`` visible tasks; its cost is the empty travel to the
+task's pickup (the *travel delay*).
+
+| Import             | `from rtaw_marl import warehouse_v0`                    |
+|--------------------|---------------------------------------------------------|
+| Actions            | Discrete                                                |
+| Parallel API       | No (one robot acts at a time)                           |
+| Manual control     | No                                                      |
+| Agents             | `agents = ['robot_0', ..., 'robot_{M-1}']`              |
+| Number of agents   | `num_robots` (M)                                        |
+| Action shape       | `()`                                                    |
+| Action values      | `Discrete(queue_len)`                                   |
+| Observation shape  | dict: robots `[M, 3]`, tasks `[N, 6]`, agent `[3]`, action_mask `[N]` |
+| Observation values | float32, roughly in `[0, 1]` (see scales)               |
+
+## Agents and turn order
+
+`agent_selection` is always the robot that becomes free next (the one with the
+smallest free time; ties go to the lowest robot id). It picks a task, travels to the
+task's origin and on to its destination, and becomes free again at completion time plus
+Gaussian noise (`noise_mean`, `noise_var`). Decisions happen at irregular times, so
+the same robot may act several times in a row.
+
+## Observation
+
+A dict per agent, all float32 except the mask. Lengths and times are divided by the
+layout scale `L = max(W, H)` (robots move one cell per second, so times and distances
+share the scale); coordinates use `x` = column, `y` = row.
+
+* `robots` `[M, 3]`: for every robot, `(x / L, y / L, time_until_free / L)`. The cell
+  is where the robot will be when next free (its current task's destination). The same
+  array object is shared by all agents' observations of one decision; copy it before
+  modifying it.
+* `tasks` `[N, 6]`: for every queue slot, `(ox, oy, dx, dy, k, l) / L`: origin,
+  destination, `k` the travel distance from *this* robot to the origin and `l` the
+  task length (origin -> destination). Empty slots (possible at the end of a `drain`
+  episode) are all zeros.
+* `agent` `[3]`: this robot's own row of `robots`.
+* `action_mask` `[N]` int8: 1 for the slots holding a task. The mask of any agent other
+  than the selected one is all zeros.
+
+## Actions
+
+The index of a queue slot. An out-of-range or empty slot raises
+`rtaw_marl.errors.InvalidActionError` (nothing is silently fixed). The chosen slot is
+refilled from the task stream.
+
+## Rewards
+
+Minus the travel delay of the chosen task (`reward="ttd"`, the paper's reward), or for
+the paper's ablation minus the task length (`"length"`) or their sum
+(`"ttd_length"`). Only the acting robot is rewarded.
+
+## Termination and truncation
+
+An episode is `num_tasks` decisions. In `episode_mode="drain"` (default) exactly
+`num_tasks` tasks are served and the episode *terminates*; in `"paper"` mode the queue
+is always refilled, unserved tasks remain at the end, and the episode is *truncated*.
+Then every agent is terminated (or truncated) at once, and `infos[agent]["episode"]`
+holds the episode metrics (`ttd`, `makespan`, ...).
+
+## Arguments
+
+`num_robots=10, num_tasks=500, queue_len=10, episode_mode="drain", noise_mean=0.25,
+noise_var=0.25, reward="ttd", robot_starts=None, robot_free_times=None,
+layout="shelves", navigator="astar", tasks="designated", render_mode=None`.
+`layout` and `tasks` take a name, a `{"name": ..., **params}` mapping or an object
+(`Layout`, `TaskStream`); `layout` also takes a file path. `render_mode="ansi"`
+returns the grid as text.
+
+## Version History
+
+* v0: initial release.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import AECEnv
+from pettingzoo.utils import wrappers
+
+from rtaw_marl.env.render import render_ansi
+from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.tasks import TaskStream
+
+__all__ = ["env", "raw_env"]
+
+
+def env(**kwargs: Any) -> AECEnv:
+    """The warehouse env wrapped in PettingZoo's ``OrderEnforcingWrapper``.
+
+    ``AssertOutOfBoundsWrapper`` is left out on purpose: the raw env already raises a
+    clear :class:`~rtaw_marl.errors.InvalidActionError` for any illegal action.
+    """
+    return wrappers.OrderEnforcingWrapper(raw_env(**kwargs))
+
+
+class raw_env(AECEnv):  # noqa: N801 (PettingZoo naming convention)
+    """The unwrapped warehouse AEC environment; see the module docstring."""
+
+    metadata = {"name": "rtaw_warehouse_v0", "render_modes": ["ansi"], "is_parallelizable": False}
+
+    def __init__(
+        self,
+        num_robots: int = 10,
+        num_tasks: int = 500,
+        queue_len: int = 10,
+        episode_mode: str = "drain",
+        noise_mean: float = 0.25,
+        noise_var: float = 0.25,
+        reward: str = "ttd",
+        robot_starts: Sequence[Sequence[int]] | None = None,
+        robot_free_times: Sequence[float] | None = None,
+        layout: str | Mapping[str, Any] | Layout = "shelves",
+        navigator: str = "astar",
+        tasks: str | Mapping[str, Any] | TaskStream = "designated",
+        render_mode: str | None = None,
+    ) -> None:
+        super().__init__()
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or 'ansi', got {render_mode!r}")
+        config = SimConfig(
+            num_robots=num_robots,
+            num_tasks=num_tasks,
+            queue_len=queue_len,
+            episode_mode=episode_mode,
+            noise_mean=noise_mean,
+            noise_var=noise_var,
+            reward=reward,
+            robot_starts=None if robot_starts is None else tuple(map(tuple, robot_starts)),
+            robot_free_times=None if robot_free_times is None else tuple(robot_free_times),
+        )
+        self.sim: WarehouseSim = build_sim(config, layout, navigator, tasks)
+        self.render_mode = render_mode
+        self.scale = self.sim.layout.scale
+        m, n = config.num_robots, config.queue_len
+        self.possible_agents = [f"robot_{i}" for i in range(m)]
+        self._index = {name: i for i, name in enumerate(self.possible_agents)}
+        inf = np.float32(np.inf)
+        self._observation_space = spaces.Dict(
+            {
+                "robots": spaces.Box(0.0, np.array([[1, 1, inf]] * m, np.float32), (m, 3)),
+                "tasks": spaces.Box(0.0, np.array([[1, 1, 1, 1, inf, inf]] * n, np.float32), (n, 6)),
+                "agent": spaces.Box(0.0, np.array([1, 1, inf], np.float32), (3,)),
+                "action_mask": spaces.Box(0, 1, (n,), np.int8),
+            }
+        )
+        self._action_space = spaces.Discrete(n)
+        self._seed_rng = np.random.default_rng()
+        self._zero_mask = np.zeros(n, dtype=np.int8)
+
+    @property
+    def navigator(self):  # noqa: ANN201 (re-exported for policies that need distances)
+        """The simulator's navigator (RBTS uses it to measure other robots' distances)."""
+        return self.sim.navigator
+
+    def observation_space(self, agent: str) -> spaces.Dict:
+        return self._observation_space
+
+    def action_space(self, agent: str) -> spaces.Discrete:
+        return self._action_space
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, seed: int | None = None, options: dict | None = None) -> None:
+        """Start an episode; ``seed`` fixes tasks, starts and noise.
+
+        Without a seed, the episode seed is drawn from a generator seeded by the last
+        explicit seed, so a seeded sequence of episodes is reproducible.
+        """
+        if seed is not None:
+            self._seed_rng = np.random.default_rng(seed)
+            episode_seed = seed
+        else:
+            episode_seed = int(self._seed_rng.integers(2**63))
+        self.sim.reset(episode_seed)
+        self.agents = self.possible_agents[:]
+        self.rewards = dict.fromkeys(self.agents, 0.0)
+        self._cumulative_rewards = dict.fromkeys(self.agents, 0.0)
+        self.terminations = dict.fromkeys(self.agents, False)
+        self.truncations = dict.fromkeys(self.agents, False)
+        self.infos = {agent: {} for agent in self.agents}
+        self._last_actor = self.possible_agents[0]
+        self._cache_decision = -1
+        self.agent_selection = self.possible_agents[self.sim.robot]
+
+    # ------------------------------------------------------------------ observe
+    def observe(self, agent: str) -> dict[str, np.ndarray]:
+        robot = self._index[agent]
+        self._refresh_cache()
+        tasks = self._task_rows.copy()
+        sim = self.sim
+        if robot == sim.robot:
+            k = sim.robot_distances()
+            mask = self._mask
+        else:
+            k = sim.robot_distances(robot)
+            mask = self._zero_mask.copy()
+        tasks[:, 4] = np.where(sim.queue_mask, k / self.scale, 0.0)
+        return {
+            "robots": self._robot_rows,
+            "tasks": tasks,
+            "agent": self._robot_rows[robot].copy(),
+            "action_mask": mask,
+        }
+
+    def _refresh_cache(self) -> None:
+        """Per-decision features shared by all agents' observations."""
+        sim = self.sim
+        if self._cache_decision == sim.decisions:
+            return
+        rows = np.empty((sim.num_robots, 3), dtype=np.float32)
+        rows[:, :2] = sim.robot_xy
+        rows[:, 2] = np.maximum(sim.robot_remaining(), 0.0)
+        rows /= self.scale
+        self._robot_rows = rows
+        task_rows = np.zeros((sim.queue_len, 6), dtype=np.float32)
+        task_rows[:, :4] = sim.queue_tasks()
+        task_rows[:, 5] = sim.queue_lengths()
+        task_rows /= self.scale
+        self._task_rows = task_rows
+        self._mask = (sim.queue_mask if not sim.done else np.zeros_like(sim.queue_mask)).astype(
+            np.int8
+        )
+        self._cache_decision = sim.decisions
+
+    # ------------------------------------------------------------------ step
+    def step(self, action: int | None) -> None:
+        agent = self.agent_selection
+        if self.terminations[agent] or self.truncations[agent]:
+            self._dead_step(action)
+            return
+        if action is None:
+            raise ValueError(f"{agent} is not done; its action must be a queue slot, got None")
+        sim = self.sim
+        self._cumulative_rewards[agent] = 0.0
+        reward = sim.step(action)
+        # Only the acting robot is rewarded: clear the previous actor's entry, O(1).
+        self.rewards[self._last_actor] = 0.0
+        self.rewards[agent] = reward
+        self._cumulative_rewards[agent] += reward
+        self._last_actor = agent
+        if sim.done:
+            self._end_episode()
+            # The last actor goes first in the dead phase, so it sees its final reward.
+            self.agent_selection = agent
+        else:
+            self.agent_selection = self.possible_agents[sim.robot]
+
+    def _end_episode(self) -> None:
+        sim = self.sim
+        done = dict.fromkeys(self.agents, True)
+        if sim.truncated:
+            self.truncations = done
+        else:
+            self.terminations = done
+        info = {"episode": sim.metrics().as_dict()}
+        self.infos = {agent: info for agent in self.agents}
+
+    def _dead_step(self, action: int | None) -> None:
+        """Remove the selected finished agent; all agents finish together, in id order."""
+        if action is not None:
+            raise ValueError("when an agent is done, the only valid action is None")
+        agent = self.agent_selection
+        for table in (
+            self.terminations,
+            self.truncations,
+            self.rewards,
+            self._cumulative_rewards,
+            self.infos,
+        ):
+            del table[agent]
+        self.agents.remove(agent)
+        if self.agents:
+            self.agent_selection = self.agents[0]
+
+    # ------------------------------------------------------------------ render
+    def render(self) -> str | None:
+        if self.render_mode is None:
+            return None
+        return render_ansi(self.sim)
+
+    def close(self) -> None:
+        pass

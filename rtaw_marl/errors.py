@@ -1,0 +1,42 @@
+"""Exceptions raised for bad input.
+
+Every error a user can cause (a bad config value, a missing or malformed file, an
+invalid action) derives from :class:`RtawError`, so command-line entry points can
+print its one-line message and exit non-zero without a traceback.
+"""
+
+from __future__ import annotations
+
+
+class RtawError(Exception):
+    """Base class of all user-facing errors of rtaw_marl."""
+
+
+class ConfigError(RtawError, ValueError):
+    """A configuration value is missing, of the wrong type or out of range."""
+
+
+class LayoutError(ConfigError):
+    """A layout file is missing or malformed, or a cell is blocked or unreachable."""
+
+
+class TaskFileError(ConfigError):
+    """A task file is missing or malformed, or a task lies on a blocked cell."""
+
+
+class InvalidActionError(RtawError, ValueError):
+    """An action names a queue slot that is out of range or empty."""
+
+
+def unknown_name(kind: str, name: str, available: list[str] | tuple[str, ...]) -> ConfigError:
+    """Build the error for an unknown registry name, listing what exists.
+
+    Args:
+        kind: What was looked up, e.g. ``"navigator"``.
+        name: The name that was not found.
+        available: The names that exist.
+
+    Returns:
+        A :class:`ConfigError` to raise.
+    """
+    return ConfigError(f"unknown {kind} {name!r}; available: {', '.join(sorted(available))}")

@@ -1,0 +1,361 @@
+"""The event-driven warehouse simulator: the paper's MDP without any RL framework.
+
+State: ``M`` robots, each with the cell where it will be when free (the destination of
+its current task, or its start) and the time it becomes free; a queue of ``N`` task
+slots. At each decision the robot that becomes free next (ties: lowest robot id) is
+*selected*; the policy picks one queued task for it. The robot travels to the task's
+origin (this empty travel is the task's TTD) and on to its destination, then becomes
+free at that completion time plus Gaussian noise (never earlier than the decision
+time). The chosen slot is refilled from the task stream.
+
+Episode modes (``episode_mode``):
+
+``drain`` (default)
+    Exactly ``num_tasks`` tasks are served. When the stream is exhausted, emptied
+    slots stay empty (masked) until every task is assigned; the episode *terminates*.
+``paper``
+    As in the paper and its original code: ``num_tasks`` decisions with the queue
+    always refilled, so tasks still queued at the end are never served; the episode is
+    *truncated* (a time limit, not a terminal state).
+
+Per decision the work is a handful of numpy calls over ``M`` robots and ``N`` slots.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
+from rtaw_marl.sim.navigation import Navigator
+from rtaw_marl.sim.tasks import TaskStream
+
+__all__ = ["EPISODE_MODES", "REWARDS", "SimConfig", "WarehouseSim"]
+
+EPISODE_MODES = ("drain", "paper")
+#: Reward = minus this quantity of the chosen task (the paper's reward ablation).
+REWARDS = ("ttd", "length", "ttd_length")
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Parameters of the simulator (the ``env.*`` config keys).
+
+    Attributes:
+        num_robots: ``M``, at least 1.
+        num_tasks: Tasks served (``drain``) or decisions taken (``paper``) per episode.
+        queue_len: ``N``, the number of visible queued tasks, at least 1.
+        episode_mode: ``"drain"`` or ``"paper"``.
+        noise_mean: Mean of the Gaussian noise added to completion times (seconds).
+        noise_var: Its variance; 0 makes the dynamics deterministic.
+        reward: ``"ttd"`` (default), ``"length"`` or ``"ttd_length"``.
+        robot_starts: ``(x, y)`` start cell per robot; random distinct free cells from
+            the episode seed when ``None``.
+        robot_free_times: Time at which each robot is first free; all 0 when ``None``.
+    """
+
+    num_robots: int = 10
+    num_tasks: int = 500
+    queue_len: int = 10
+    episode_mode: str = "drain"
+    noise_mean: float = 0.25
+    noise_var: float = 0.25
+    reward: str = "ttd"
+    robot_starts: tuple[tuple[int, int], ...] | None = None
+    robot_free_times: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in ("num_robots", "num_tasks", "queue_len"):
+                if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                    raise ConfigError(f"env.{f.name} must be an integer, got {value!r}")
+                if value < 1:
+                    raise ConfigError(f"env.{f.name} must be >= 1, got {value}")
+        if self.episode_mode not in EPISODE_MODES:
+            raise ConfigError(
+                f"env.episode_mode must be one of {', '.join(EPISODE_MODES)}, "
+                f"got {self.episode_mode!r}"
+            )
+        if self.reward not in REWARDS:
+            raise ConfigError(f"env.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}")
+        if not self.noise_var >= 0:
+            raise ConfigError(f"env.noise_var must be >= 0, got {self.noise_var}")
+        if not np.isfinite(self.noise_mean):
+            raise ConfigError(f"env.noise_mean must be finite, got {self.noise_mean}")
+        if self.robot_starts is not None:
+            starts = tuple(tuple(s) for s in self.robot_starts)
+            if len(starts) != self.num_robots or any(len(s) != 2 for s in starts):
+                raise ConfigError(
+                    f"env.robot_starts must hold num_robots={self.num_robots} [x, y] pairs, "
+                    f"got {len(starts)} entries"
+                )
+            object.__setattr__(self, "robot_starts", starts)
+        if self.robot_free_times is not None:
+            times = tuple(float(t) for t in self.robot_free_times)
+            if len(times) != self.num_robots or not all(np.isfinite(t) and t >= 0 for t in times):
+                raise ConfigError(
+                    f"env.robot_free_times must hold num_robots={self.num_robots} finite "
+                    "non-negative times"
+                )
+            object.__setattr__(self, "robot_free_times", times)
+
+
+class WarehouseSim:
+    """One warehouse episode at a time, stepped one decision at a time.
+
+    Args:
+        config: Simulator parameters.
+        layout: The grid.
+        navigator: Distances on ``layout``.
+        tasks: The task stream.
+
+    Public state after :meth:`reset` (read-only views; do not modify):
+        robot: Index of the selected robot.
+        time: Current decision time.
+        robot_xy: ``int64 [M, 2]`` cell of each robot when it is next free.
+        robot_free_at: ``float64 [M]`` time each robot becomes free.
+        queue_ids: ``int64 [N]`` task id per slot, ``-1`` for an empty slot.
+        queue_mask: ``bool [N]`` which slots hold a task (the legal actions).
+        tasks: ``int64 [T, 4]`` every task of the episode in arrival order.
+        task_length: ``float64 [T]`` origin -> destination distance per task (NaN until
+            the task enters the queue).
+        done: The episode is over; ``truncated`` tells whether by the decision limit.
+    """
+
+    def __init__(
+        self, config: SimConfig, layout: Layout, navigator: Navigator, tasks: TaskStream
+    ) -> None:
+        if navigator.layout is not layout:
+            raise ConfigError("navigator was built for a different layout")
+        if config.num_robots > len(layout.main_cells) and config.robot_starts is None:
+            raise ConfigError(
+                f"env.num_robots={config.num_robots} exceeds the {len(layout.main_cells)} free "
+                f"cells of layout {layout.name!r}"
+            )
+        if tasks.refill_same_slot and tasks.max_tasks is None:
+            fixed = getattr(tasks, "tasks", None)
+            if fixed is not None and len(fixed) != config.queue_len:
+                raise ConfigError(
+                    f"this task stream refills each slot with its own task: env.queue_len must "
+                    f"be {len(fixed)}, got {config.queue_len}"
+                )
+        self.config = config
+        self.layout = layout
+        self.navigator = navigator
+        self.stream = tasks
+        self.num_robots = config.num_robots
+        self.queue_len = config.queue_len
+        self._paper = config.episode_mode == "paper"
+        self._reward_code = REWARDS.index(config.reward)
+        self._slots = navigator.target_slots(config.queue_len)
+        self._noise_std = float(np.sqrt(config.noise_var))
+        self.done = True
+        self.truncated = False
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, seed: int | None = None) -> None:
+        """Start a new episode; the same ``seed`` gives the same tasks, starts and noise."""
+        cfg = self.config
+        m, n = self.num_robots, self.queue_len
+        task_rng, start_rng, noise_rng = (
+            np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3)
+        )
+        total = cfg.num_tasks + n if self._paper else cfg.num_tasks
+        tasks = np.asarray(self.stream.generate(task_rng, self.layout, total), dtype=np.int64)
+        self.layout.check_cells(tasks[:, :2], "origin of task")
+        self.layout.check_cells(tasks[:, 2:], "destination of task")
+
+        if cfg.robot_starts is not None:
+            starts = np.asarray(cfg.robot_starts, dtype=np.int64)
+            self.layout.check_cells(starts, "start of robot")
+        else:
+            cells = self.layout.main_cells
+            starts = cells[start_rng.choice(len(cells), size=m, replace=False)]
+        self.navigator.check_connected(
+            np.concatenate([tasks[:, :2], tasks[:, 2:], starts]), "cell (tasks, then robots)"
+        )
+
+        self.tasks = tasks
+        # Lengths are measured when a task enters the queue, from its slot's field.
+        self.task_length = np.full(total, np.nan)
+        self.robot_xy = starts.copy()
+        self.robot_start_xy = starts.copy()
+        self.robot_free_at = (
+            np.asarray(cfg.robot_free_times, dtype=np.float64)
+            if cfg.robot_free_times is not None
+            else np.zeros(m, dtype=np.float64)
+        )
+        self.robot_busy = np.zeros(m, dtype=np.float64)
+        if self._noise_std > 0:
+            self._noise = noise_rng.normal(cfg.noise_mean, self._noise_std, size=cfg.num_tasks)
+        else:
+            self._noise = np.full(cfg.num_tasks, float(cfg.noise_mean))
+
+        # Per-task records, filled as tasks arrive and are assigned.
+        self.task_arrival = np.full(total, np.nan)
+        self.task_assigned = np.full(total, np.nan)
+        self.task_ttd = np.full(total, np.nan)
+        self.task_finished = np.full(total, np.nan)
+        self.task_robot = np.full(total, -1, dtype=np.int64)
+
+        self.queue_ids = np.full(n, -1, dtype=np.int64)
+        self.queue_mask = np.zeros(n, dtype=bool)
+        first = min(n, total)
+        self.queue_ids[:first] = np.arange(first)
+        self.queue_mask[:first] = True
+        self.task_arrival[:first] = 0.0
+        for slot in range(first):
+            self._enqueue(slot, slot)
+        self._next_task = first
+
+        self.decisions = 0
+        self.done = False
+        self.truncated = False
+        self.last_ttd = 0.0
+        self._select_next_robot()
+
+    # ------------------------------------------------------------------ queries
+    def robot_distances(self, robot: int | None = None) -> np.ndarray:
+        """Distances ``float64 [N]`` from a robot (default: the selected one) to each queued origin.
+
+        Entries of empty slots are meaningless; mask them with :attr:`queue_mask`.
+        Cached for the selected robot at the current decision.
+        """
+        if robot is not None and robot != self.robot:
+            x, y = self.robot_xy[robot]
+            return self._slots.distances_from_one(int(x), int(y))
+        if self._dist is None:
+            x, y = self.robot_xy[self.robot]
+            self._dist = self._slots.distances_from_one(int(x), int(y))
+        return self._dist
+
+    def distance_matrix(self) -> np.ndarray:
+        """Distances ``float64 [M, N]`` from every robot's cell to each queued origin."""
+        return self._slots.distances_from(self.robot_xy)
+
+    def queue_tasks(self) -> np.ndarray:
+        """``int64 [N, 4]`` task rows per slot; rows of empty slots are 0."""
+        return np.where(self.queue_mask[:, None], self.tasks[self.queue_ids], 0)
+
+    def queue_lengths(self) -> np.ndarray:
+        """``float64 [N]`` origin -> destination distance per slot; 0 for empty slots."""
+        return np.where(self.queue_mask, self.task_length[self.queue_ids], 0.0)
+
+    def robot_remaining(self) -> np.ndarray:
+        """``float64 [M]`` time until each robot is free (0 for the selected robot)."""
+        return self.robot_free_at - self.time
+
+    # ------------------------------------------------------------------ step
+    def step(self, action: int) -> float:
+        """Give queued task ``action`` to the selected robot and advance to the next decision.
+
+        Returns:
+            The reward of this decision (minus the TTD of the chosen task by default).
+
+        Raises:
+            InvalidActionError: ``action`` is out of range or names an empty slot, or the
+                episode is over.
+        """
+        if self.done:
+            raise InvalidActionError("the episode is over; call reset()")
+        try:
+            slot = int(action)
+        except (TypeError, ValueError):
+            raise InvalidActionError(f"action must be an integer slot index, got {action!r}") from None
+        if not (0 <= slot < self.queue_len and slot == action):
+            raise InvalidActionError(
+                f"action {action!r} is not a queue slot (0..{self.queue_len - 1})"
+            )
+        if not self.queue_mask[slot]:
+            raise InvalidActionError(f"action {slot} names an empty queue slot")
+
+        robot, now = self.robot, self.time
+        task = int(self.queue_ids[slot])
+        ttd = float(self.robot_distances()[slot])
+        length = float(self.task_length[task])
+        finish = now + ttd + length + float(self._noise[self.decisions])
+        if finish < now:
+            finish = now
+
+        self.task_assigned[task] = now
+        self.task_ttd[task] = ttd
+        self.task_finished[task] = finish
+        self.task_robot[task] = robot
+        row = self.tasks[task]
+        self.robot_xy[robot, 0] = row[2]
+        self.robot_xy[robot, 1] = row[3]
+        self.robot_free_at[robot] = finish
+        self.robot_busy[robot] += ttd + length
+        self._refill(slot, task, now)
+
+        self.decisions += 1
+        self.last_ttd = ttd
+        if self.decisions >= self.config.num_tasks:
+            self.done = True
+            self.truncated = self._paper
+        else:
+            self._select_next_robot()
+
+        if self._reward_code == 0:
+            return -ttd
+        if self._reward_code == 1:
+            return -length
+        return -(ttd + length)
+
+    def _refill(self, slot: int, task: int, now: float) -> None:
+        new = self._next_task
+        if new >= len(self.tasks):
+            self.queue_ids[slot] = -1
+            self.queue_mask[slot] = False
+            return
+        if self.stream.refill_same_slot:
+            # The slot keeps its task: the paper's two-task queue always holds both tasks.
+            self.tasks[new] = self.tasks[task]
+        self._next_task = new + 1
+        self.task_arrival[new] = now
+        self._enqueue(slot, new)
+
+    def _enqueue(self, slot: int, task: int) -> None:
+        ox, oy, dx, dy = (int(v) for v in self.tasks[task])
+        self._slots.set(slot, ox, oy)
+        self.task_length[task] = self._slots.distance_to(slot, dx, dy)
+        self.queue_ids[slot] = task
+
+    def _select_next_robot(self) -> None:
+        self.robot = int(self.robot_free_at.argmin())
+        self.time = float(self.robot_free_at[self.robot])
+        self._dist = None
+
+    # ------------------------------------------------------------------ results
+    def metrics(self) -> EpisodeMetrics:
+        """Metrics of the episode so far (final once :attr:`done`)."""
+        served = self.task_robot >= 0
+        result, _ = compute_metrics(
+            served,
+            self.task_ttd,
+            self.task_length,
+            self.task_arrival,
+            self.task_assigned,
+            self.task_finished,
+            self.robot_busy,
+            self.decisions,
+        )
+        return result
+
+    def robot_idle(self) -> np.ndarray:
+        """Per-robot idle time ``float64 [M]`` within ``[0, makespan]``."""
+        _, idle = compute_metrics(
+            self.task_robot >= 0,
+            self.task_ttd,
+            self.task_length,
+            self.task_arrival,
+            self.task_assigned,
+            self.task_finished,
+            self.robot_busy,
+            self.decisions,
+        )
+        return idle

@@ -1,0 +1,304 @@
+"""Navigators: travel distances between cells of a layout.
+
+A navigator answers two questions for the simulator:
+
+* the distance between pairs or sets of cells (:meth:`Navigator.distance`,
+  :meth:`Navigator.distance_matrix`), and
+* the distances from any robot cells to the ``N`` task origins currently queued,
+  through a mutable :class:`TargetSlots` object kept in step with the queue. This is
+  the per-decision hot path: one gather, no Python loop over robots.
+
+Robots move one cell per second, so distances are travel times in seconds.
+
+``direct``
+    Euclidean distance, obstacles ignored (the paper's "Direct" navigation).
+``astar``
+    True 4-connected shortest paths. Distances come from per-target BFS distance
+    fields (a BFS from the target is an A* with the exact heuristic) computed by a
+    small compiled kernel and kept in an LRU cache; paths are recovered by descending
+    the field. A pair of cells in different connected regions is an error.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections import OrderedDict
+
+import numpy as np
+
+from rtaw_marl.errors import LayoutError, unknown_name
+from rtaw_marl.sim._bfs import bfs_fields
+from rtaw_marl.sim.layout import Layout
+
+__all__ = [
+    "NAVIGATORS",
+    "AStarNavigator",
+    "DirectNavigator",
+    "Navigator",
+    "TargetSlots",
+    "make_navigator",
+]
+
+
+class TargetSlots(ABC):
+    """``N`` mutable target cells; distances from arbitrary cells to all of them."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+
+    @abstractmethod
+    def set(self, slot: int, x: int, y: int) -> None:
+        """Make cell ``(x, y)`` the target of ``slot``."""
+
+    @abstractmethod
+    def distances_from(self, xy: np.ndarray) -> np.ndarray:
+        """Distances ``float64 [P, N]`` from each cell of ``xy [P, 2]`` to each slot."""
+
+    def distances_from_one(self, x: int, y: int) -> np.ndarray:
+        """Distances ``float64 [N]`` from cell ``(x, y)`` to each slot."""
+        return self.distances_from(np.array([[x, y]]))[0]
+
+    @abstractmethod
+    def distance_to(self, slot: int, x: int, y: int) -> float:
+        """Distance from cell ``(x, y)`` to the target of ``slot``."""
+
+
+class Navigator(ABC):
+    """Travel distances on one layout."""
+
+    name: str = ""
+
+    def __init__(self, layout: Layout) -> None:
+        self.layout = layout
+
+    @abstractmethod
+    def distance(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Row-wise distances ``float64 [K]`` from ``a [K, 2]`` to ``b [K, 2]``."""
+
+    @abstractmethod
+    def distance_matrix(self, sources: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        """Distances ``float64 [P, K]`` from every source ``[P, 2]`` to every target ``[K, 2]``."""
+
+    @abstractmethod
+    def target_slots(self, size: int) -> TargetSlots:
+        """A new :class:`TargetSlots` with ``size`` slots bound to this navigator."""
+
+    @abstractmethod
+    def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
+        """Cells ``int64 [L, 2]`` visited from ``a`` to ``b``, both ends included."""
+
+    def check_connected(self, cells: np.ndarray, what: str) -> None:
+        """Raise :class:`LayoutError` unless all cells of ``cells [K, 2]`` are mutually reachable."""
+
+
+class DirectNavigator(Navigator):
+    """Euclidean distances; obstacles are ignored (the paper's "Direct" setting)."""
+
+    name = "direct"
+
+    def distance(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        d = np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)
+        return np.hypot(d[..., 0], d[..., 1])
+
+    def distance_matrix(self, sources: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        s = np.asarray(sources, dtype=np.float64)[:, None, :]
+        t = np.asarray(targets, dtype=np.float64)[None, :, :]
+        return np.hypot(s[..., 0] - t[..., 0], s[..., 1] - t[..., 1])
+
+    def target_slots(self, size: int) -> TargetSlots:
+        return _DirectSlots(size)
+
+    def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
+        return np.array([a, b], dtype=np.int64)
+
+
+class _DirectSlots(TargetSlots):
+    def __init__(self, size: int) -> None:
+        super().__init__(size)
+        self._xy = np.zeros((size, 2), dtype=np.float64)
+
+    def set(self, slot: int, x: int, y: int) -> None:
+        self._xy[slot, 0] = x
+        self._xy[slot, 1] = y
+
+    def distances_from(self, xy: np.ndarray) -> np.ndarray:
+        xy = np.asarray(xy, dtype=np.float64)
+        return np.hypot(xy[:, 0:1] - self._xy[:, 0], xy[:, 1:2] - self._xy[:, 1])
+
+    def distances_from_one(self, x: int, y: int) -> np.ndarray:
+        return np.hypot(x - self._xy[:, 0], y - self._xy[:, 1])
+
+    def distance_to(self, slot: int, x: int, y: int) -> float:
+        return float(np.hypot(x - self._xy[slot, 0], y - self._xy[slot, 1]))
+
+
+class AStarNavigator(Navigator):
+    """4-connected shortest paths from cached per-target BFS distance fields.
+
+    Fields live on the grid padded by one blocked border cell, so the BFS kernel needs
+    no bounds checks; ``_padded_index`` maps ``(x, y)`` to that layout. A field is
+    ``int32 [(H + 2) * (W + 2)]`` with ``-1`` on unreachable cells.
+
+    Args:
+        layout: The grid.
+        cache_mb: Memory budget of the field cache; least recently used fields are
+            evicted beyond it.
+    """
+
+    name = "astar"
+
+    def __init__(self, layout: Layout, cache_mb: float = 256.0) -> None:
+        super().__init__(layout)
+        self._wp = layout.width + 2
+        free = np.zeros((layout.height + 2, self._wp), dtype=np.bool_)
+        free[1:-1, 1:-1] = ~layout.obstacles
+        self._free_padded = free.ravel()
+        field_bytes = self._free_padded.size * 4
+        self._capacity = max(64, int(cache_mb * 2**20 // field_bytes))
+        self._cache: OrderedDict[int, np.ndarray] = OrderedDict()
+        self.fields_computed = 0
+
+    def _padded_index(self, xy: np.ndarray) -> np.ndarray:
+        xy = np.asarray(xy, dtype=np.int64)
+        return (xy[..., 1] + 1) * self._wp + (xy[..., 0] + 1)
+
+    def fields(self, targets: np.ndarray) -> np.ndarray:
+        """Distance fields ``int32 [K, (H + 2) * (W + 2)]`` of the cells ``targets [K, 2]``.
+
+        Missing fields are computed in one batched kernel call and cached.
+        """
+        keys = self._padded_index(targets).reshape(-1)
+        missing = [k for k in dict.fromkeys(keys.tolist()) if k not in self._cache]
+        if missing:
+            out = np.empty((len(missing), self._free_padded.size), dtype=np.int32)
+            bfs_fields(self._free_padded, self._wp, np.asarray(missing, dtype=np.int64), out)
+            self.fields_computed += len(missing)
+            for k, row in zip(missing, out, strict=True):
+                self._cache[k] = row
+        rows = []
+        for k in keys.tolist():
+            self._cache.move_to_end(k)
+            rows.append(self._cache[k])
+        while len(self._cache) > self._capacity:
+            self._cache.popitem(last=False)
+        return np.stack(rows) if rows else np.empty((0, self._free_padded.size), np.int32)
+
+    def field(self, x: int, y: int) -> np.ndarray:
+        """The distance field ``int32 [(H + 2) * (W + 2)]`` of one target cell."""
+        key = (int(y) + 1) * self._wp + int(x) + 1
+        row = self._cache.get(key)
+        if row is None:
+            return self.fields(np.array([[x, y]]))[0]
+        self._cache.move_to_end(key)
+        return row
+
+    def distance(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        a = np.asarray(a, dtype=np.int64).reshape(-1, 2)
+        b = np.asarray(b, dtype=np.int64).reshape(-1, 2)
+        out = np.empty(len(a), dtype=np.float64)
+        # Batch by target so each distinct target costs one field lookup.
+        uniq, inverse = np.unique(self._padded_index(b), return_inverse=True)
+        for start in range(0, len(uniq), self._capacity // 2):
+            chunk = np.arange(start, min(start + self._capacity // 2, len(uniq)))
+            targets = np.stack([uniq[chunk] % self._wp - 1, uniq[chunk] // self._wp - 1], axis=1)
+            fields = self.fields(targets)
+            sel = np.flatnonzero((inverse >= chunk[0]) & (inverse <= chunk[-1]))
+            out[sel] = fields[inverse[sel] - chunk[0], self._padded_index(a[sel])]
+        return self._checked(out, a, b)
+
+    def distance_matrix(self, sources: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        sources = np.asarray(sources, dtype=np.int64).reshape(-1, 2)
+        targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
+        d = self.fields(targets)[:, self._padded_index(sources)].T.astype(np.float64)
+        if (d < 0).any():
+            i, j = np.argwhere(d < 0)[0]
+            self._checked(np.array([-1.0]), sources[i : i + 1], targets[j : j + 1])
+        return d
+
+    def target_slots(self, size: int) -> TargetSlots:
+        return _FieldSlots(self, size)
+
+    def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
+        field = self.field(*b)
+        cur = int(self._padded_index(np.array(a)))
+        if field[cur] < 0:
+            self._checked(np.array([-1.0]), np.array([a]), np.array([b]))
+        cells = [cur]
+        offsets = (1, -1, self._wp, -self._wp)
+        while field[cur] > 0:
+            # Any neighbour one step closer to b lies on a shortest path.
+            cur = next(cur + o for o in offsets if field[cur + o] == field[cur] - 1)
+            cells.append(cur)
+        cells_arr = np.asarray(cells)
+        return np.stack([cells_arr % self._wp - 1, cells_arr // self._wp - 1], axis=1)
+
+    def check_connected(self, cells: np.ndarray, what: str) -> None:
+        cells = np.asarray(cells, dtype=np.int64).reshape(-1, 2)
+        if cells.size == 0 or self.layout.num_components == 1:
+            return
+        labels = self.layout.component_labels[cells[:, 1], cells[:, 0]]
+        bad = np.flatnonzero(labels != labels[0])
+        if bad.size:
+            i = int(bad[0])
+            raise LayoutError(
+                f"{what} {i} at (x={int(cells[i, 0])}, y={int(cells[i, 1])}) cannot be reached "
+                f"from (x={int(cells[0, 0])}, y={int(cells[0, 1])}) on layout "
+                f"{self.layout.name!r}: they lie in different connected regions"
+            )
+
+    def _checked(self, d: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        if (d < 0).any():
+            i = int(np.flatnonzero(d < 0)[0])
+            raise LayoutError(
+                f"no path from (x={int(a[i, 0])}, y={int(a[i, 1])}) to "
+                f"(x={int(b[i, 0])}, y={int(b[i, 1])}) on layout {self.layout.name!r}"
+            )
+        return d
+
+
+class _FieldSlots(TargetSlots):
+    """Slot targets as a dense ``[N, cells]`` copy of their fields, so a query is one gather."""
+
+    def __init__(self, navigator: AStarNavigator, size: int) -> None:
+        super().__init__(size)
+        self._nav = navigator
+        self._fields = np.zeros((size, navigator._free_padded.size), dtype=np.int32)
+        self._rows = np.arange(size)
+
+    def set(self, slot: int, x: int, y: int) -> None:
+        self._fields[slot] = self._nav.field(x, y)
+
+    def distances_from(self, xy: np.ndarray) -> np.ndarray:
+        idx = self._nav._padded_index(xy)
+        return self._fields[:, idx].T.astype(np.float64)
+
+    def distances_from_one(self, x: int, y: int) -> np.ndarray:
+        return self._fields[:, (y + 1) * self._nav._wp + x + 1].astype(np.float64)
+
+    def distance_to(self, slot: int, x: int, y: int) -> float:
+        d = int(self._fields[slot, (y + 1) * self._nav._wp + x + 1])
+        if d < 0:
+            raise LayoutError(
+                f"no path from (x={x}, y={y}) to a queued task origin on layout "
+                f"{self._nav.layout.name!r}"
+            )
+        return float(d)
+
+
+NAVIGATORS: dict[str, type[Navigator]] = {
+    DirectNavigator.name: DirectNavigator,
+    AStarNavigator.name: AStarNavigator,
+}
+
+
+def make_navigator(name: str, layout: Layout) -> Navigator:
+    """Build the navigator registered as ``name`` for ``layout``.
+
+    Raises:
+        ConfigError: ``name`` is not registered; the message lists the names that are.
+    """
+    try:
+        cls = NAVIGATORS[name]
+    except KeyError:
+        raise unknown_name("navigator", name, list(NAVIGATORS)) from None
+    return cls(layout)

@@ -1,0 +1,141 @@
+"""Named layouts and task streams, built from plain config mappings.
+
+Each option is a builder with explicit keyword parameters; a spec is a mapping with a
+``name`` key plus those parameters (the Hydra ``layout``/``tasks`` groups are such
+mappings). Unknown names and unknown parameters fail with the list of what exists.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from rtaw_marl.errors import ConfigError, unknown_name
+from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
+from rtaw_marl.sim.navigation import make_navigator
+from rtaw_marl.sim.tasks import (
+    POC_TASKS,
+    TWO_TASKS,
+    DesignatedTasks,
+    FixedTasks,
+    RandomTasks,
+    TaskStream,
+    load_task_csv,
+)
+
+__all__ = ["LAYOUTS", "TASK_STREAMS", "build_sim", "make_layout", "make_task_stream"]
+
+
+def _file_layout(path: str) -> Layout:
+    return load_layout(path)
+
+
+def _file_tasks(path: str) -> TaskStream:
+    return load_task_csv(path)
+
+
+LAYOUTS: dict[str, Callable[..., Layout]] = {
+    "open": open_grid,
+    "shelves": shelf_grid,
+    "file": _file_layout,
+}
+
+TASK_STREAMS: dict[str, Callable[..., TaskStream]] = {
+    "random": RandomTasks,
+    "designated": DesignatedTasks,
+    "file": _file_tasks,
+    "poc": lambda: FixedTasks(POC_TASKS, name="poc tasks"),
+    "two_task": lambda: FixedTasks(TWO_TASKS, refill_same_slot=True, name="two-task tasks"),
+}
+
+
+def make_layout(spec: str | Mapping[str, Any] | Layout) -> Layout:
+    """Build a layout from a name, a file path, a ``{"name": ..., **params}`` mapping or a Layout.
+
+    A mapping with a non-null ``path`` loads that file whatever its ``name``.
+    """
+    if isinstance(spec, Layout):
+        return spec
+    if isinstance(spec, str):
+        if spec in LAYOUTS and spec != "file":
+            return LAYOUTS[spec]()
+        if Path(spec).suffix:
+            return load_layout(spec)
+        raise unknown_name("layout", spec, [k for k in LAYOUTS if k != "file"])
+    params = dict(spec)
+    path = params.pop("path", None)
+    name = params.pop("name", None)
+    if path is not None:
+        return load_layout(path)
+    if name is None:
+        raise ConfigError("layout config needs a 'name' (or a 'path')")
+    return _call("layout", LAYOUTS, name, params)
+
+
+def make_task_stream(spec: str | Mapping[str, Any] | TaskStream) -> TaskStream:
+    """Build a task stream from a name, a ``{"name": ..., **params}`` mapping or a TaskStream."""
+    if isinstance(spec, TaskStream):
+        return spec
+    if isinstance(spec, str):
+        return _call("task stream", TASK_STREAMS, spec, {})
+    params = dict(spec)
+    name = params.pop("name", None)
+    if name is None:
+        raise ConfigError("tasks config needs a 'name'")
+    return _call("task stream", TASK_STREAMS, name, params)
+
+
+def build_sim(
+    env: Mapping[str, Any] | SimConfig,
+    layout: str | Mapping[str, Any] | Layout,
+    navigator: str,
+    tasks: str | Mapping[str, Any] | TaskStream,
+) -> WarehouseSim:
+    """Build a :class:`WarehouseSim` from config values.
+
+    Args:
+        env: :class:`SimConfig` or a mapping of its fields (the ``env.*`` keys).
+        layout: Layout spec (see :func:`make_layout`).
+        navigator: Navigator name (``direct`` or ``astar``).
+        tasks: Task stream spec (see :func:`make_task_stream`).
+    """
+    config = env if isinstance(env, SimConfig) else sim_config(env)
+    grid = make_layout(layout)
+    return WarehouseSim(config, grid, make_navigator(navigator, grid), make_task_stream(tasks))
+
+
+def sim_config(values: Mapping[str, Any]) -> SimConfig:
+    """A :class:`SimConfig` from a mapping; unknown keys are an error naming them."""
+    allowed = set(inspect.signature(SimConfig).parameters)
+    unknown = sorted(set(values) - allowed)
+    if unknown:
+        raise ConfigError(f"unknown env keys {unknown}; available: {', '.join(sorted(allowed))}")
+    return SimConfig(**dict(values))
+
+
+def _call(kind: str, registry: Mapping[str, Callable[..., Any]], name: str, params: dict) -> Any:
+    try:
+        builder = registry[name]
+    except KeyError:
+        raise unknown_name(kind, name, list(registry)) from None
+    allowed = set(inspect.signature(builder).parameters)
+    unknown = sorted(set(params) - allowed)
+    if unknown:
+        raise ConfigError(
+            f"unknown parameters {unknown} for {kind} {name!r}; "
+            f"available: {', '.join(sorted(allowed)) or 'none'}"
+        )
+    missing = [
+        p.name
+        for p in inspect.signature(builder).parameters.values()
+        if p.default is inspect.Parameter.empty and p.name not in params
+    ]
+    if missing or any(v is None and k in missing for k, v in params.items()):
+        raise ConfigError(f"{kind} {name!r} needs {', '.join(missing)}")
+    for key, value in params.items():
+        if value is None:
+            raise ConfigError(f"{kind} {name!r}: parameter {key!r} must be set")
+    return builder(**params)

@@ -1,0 +1,239 @@
+"""Task streams: where pickup -> delivery tasks come from.
+
+A task is an ``int64 [4]`` row ``(ox, oy, dx, dy)``: origin (pickup) and destination
+(delivery) cells. A stream draws an episode's tasks up front, in arrival order, from a
+``numpy.random.Generator`` seeded by the episode seed, so every policy sees the same
+tasks for the same seed whatever it decides.
+
+``random``
+    Origin and destination uniform over the layout's main connected region, distinct.
+``designated``
+    Origin drawn from a Gaussian (``sigma`` cells) around a pickup centre chosen
+    uniformly, destination likewise around a delivery centre. Draws are rounded to the
+    nearest cell; draws off the grid, on obstacles or outside the main region are
+    redrawn (a truncated Gaussian). Defaults are the original RTAW code's five centres.
+``file``
+    A fixed list read from a CSV file with header ``ox,oy,dx,dy``, one task per row in
+    arrival order.
+``poc`` / ``two_task``
+    The paper's appendix settings. ``two_task`` refills every queue slot with the task
+    it just lost, so the queue always holds both fixed tasks.
+"""
+
+from __future__ import annotations
+
+import csv
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from rtaw_marl.errors import ConfigError, TaskFileError
+from rtaw_marl.sim.layout import Layout
+
+__all__ = [
+    "DEFAULT_CENTRES",
+    "POC_TASKS",
+    "TWO_TASKS",
+    "DesignatedTasks",
+    "FixedTasks",
+    "RandomTasks",
+    "TaskStream",
+    "load_task_csv",
+]
+
+#: Pickup/delivery centres of the original RTAW code (60x60 area), ``(x, y)``.
+DEFAULT_CENTRES: tuple[tuple[int, int], ...] = ((11, 10), (29, 29), (48, 16), (48, 29), (4, 54))
+
+#: The paper's proof-of-concept tasks (appendix, Table "task list"), in arrival order.
+POC_TASKS: tuple[tuple[int, int, int, int], ...] = (
+    (2, 9, 5, 5),
+    (4, 4, 0, 0),
+    (5, 6, 3, 2),
+    (2, 4, 1, 2),
+    (0, 5, 7, 1),
+)
+
+#: The paper's two-task setting: task A (0,0)->(3,3) and task B (0,0)->(9,9).
+TWO_TASKS: tuple[tuple[int, int, int, int], ...] = ((0, 0, 3, 3), (0, 0, 9, 9))
+
+_MAX_REDRAWS = 1000
+
+
+class TaskStream(ABC):
+    """Draws an episode's tasks.
+
+    Attributes:
+        refill_same_slot: If true, a queue slot is refilled with a copy of the task it
+            just lost instead of the next task of the stream.
+        max_tasks: How many tasks the stream can supply, or ``None`` for unbounded.
+    """
+
+    refill_same_slot: bool = False
+    max_tasks: int | None = None
+
+    @abstractmethod
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        """The first ``count`` tasks, ``int64 [count, 4]`` in arrival order."""
+
+
+class RandomTasks(TaskStream):
+    """Origins and destinations uniform over the main connected region, origin != destination."""
+
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        cells = layout.main_cells
+        if len(cells) < 2:
+            raise ConfigError(f"layout {layout.name!r} needs at least 2 free cells for tasks")
+        origin = rng.integers(len(cells), size=count)
+        dest = rng.integers(len(cells), size=count)
+        same = np.flatnonzero(origin == dest)
+        while same.size:
+            dest[same] = rng.integers(len(cells), size=same.size)
+            same = same[origin[same] == dest[same]]
+        return np.concatenate([cells[origin], cells[dest]], axis=1)
+
+
+class DesignatedTasks(TaskStream):
+    """Gaussian pickup and delivery regions around fixed centres.
+
+    Args:
+        pickup_centres: ``(x, y)`` centres of the pickup regions.
+        delivery_centres: ``(x, y)`` centres of the delivery regions.
+        sigma: Standard deviation of each region in cells.
+    """
+
+    def __init__(
+        self,
+        pickup_centres: Sequence[Sequence[float]] = DEFAULT_CENTRES,
+        delivery_centres: Sequence[Sequence[float]] = DEFAULT_CENTRES,
+        sigma: float = 5.0,
+    ) -> None:
+        self.pickup_centres = _centres(pickup_centres, "pickup_centres")
+        self.delivery_centres = _centres(delivery_centres, "delivery_centres")
+        if not sigma > 0:
+            raise ConfigError(f"tasks.sigma must be > 0, got {sigma}")
+        self.sigma = float(sigma)
+
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        main = np.zeros(layout.obstacles.shape, dtype=bool)
+        main[layout.main_cells[:, 1], layout.main_cells[:, 0]] = True
+        for name, centres in (("pickup", self.pickup_centres), ("delivery", self.delivery_centres)):
+            outside = ~layout.in_bounds(np.round(centres).astype(np.int64))
+            if outside.any():
+                c = centres[int(np.flatnonzero(outside)[0])]
+                raise ConfigError(
+                    f"designated {name} centre ({c[0]:g}, {c[1]:g}) is outside layout "
+                    f"{layout.name!r} ({layout.width}x{layout.height})"
+                )
+        origin = self._draw(rng, layout, main, self.pickup_centres, count)
+        dest = self._draw(rng, layout, main, self.delivery_centres, count)
+        same = np.flatnonzero((origin == dest).all(axis=1))
+        for _ in range(_MAX_REDRAWS):
+            if not same.size:
+                break
+            dest[same] = self._draw(rng, layout, main, self.delivery_centres, same.size)
+            same = same[(origin[same] == dest[same]).all(axis=1)]
+        return np.concatenate([origin, dest], axis=1)
+
+    def _draw(
+        self,
+        rng: np.random.Generator,
+        layout: Layout,
+        main: np.ndarray,
+        centres: np.ndarray,
+        count: int,
+    ) -> np.ndarray:
+        which = rng.integers(len(centres), size=count)
+        cells = np.empty((count, 2), dtype=np.int64)
+        todo = np.arange(count)
+        for _ in range(_MAX_REDRAWS):
+            draw = np.rint(centres[which[todo]] + rng.normal(0.0, self.sigma, (todo.size, 2)))
+            draw = draw.astype(np.int64)
+            ok = layout.in_bounds(draw)
+            ok[ok] = main[draw[ok, 1], draw[ok, 0]]
+            cells[todo[ok]] = draw[ok]
+            todo = todo[~ok]
+            if not todo.size:
+                return cells
+        c = centres[which[todo[0]]]
+        raise ConfigError(
+            f"designated centre ({c[0]:g}, {c[1]:g}) has no reachable free cell within a few "
+            f"sigma={self.sigma:g} on layout {layout.name!r}"
+        )
+
+
+class FixedTasks(TaskStream):
+    """A fixed list of tasks served in order (CSV files, the paper's appendix lists).
+
+    Args:
+        tasks: ``[K, 4]`` rows ``(ox, oy, dx, dy)``.
+        refill_same_slot: Refill a slot with the task it just lost (the two-task setting);
+            the queue length must then equal ``K``.
+        name: Label used in error messages.
+    """
+
+    def __init__(
+        self,
+        tasks: Sequence[Sequence[int]] | np.ndarray,
+        refill_same_slot: bool = False,
+        name: str = "task list",
+    ) -> None:
+        arr = np.asarray(tasks, dtype=np.float64)
+        if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) == 0:
+            raise TaskFileError(f"{name}: expected a non-empty list of (ox, oy, dx, dy) rows")
+        if not np.array_equal(arr, np.round(arr)):
+            raise TaskFileError(f"{name}: task coordinates must be integers")
+        self.tasks = arr.astype(np.int64)
+        self.refill_same_slot = refill_same_slot
+        self.max_tasks = None if refill_same_slot else len(self.tasks)
+        self.name = name
+
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        layout.check_cells(self.tasks[:, :2], f"{self.name}: origin of task")
+        layout.check_cells(self.tasks[:, 2:], f"{self.name}: destination of task")
+        if self.refill_same_slot:
+            return np.resize(self.tasks, (count, 4))
+        if count > len(self.tasks):
+            raise ConfigError(
+                f"{self.name} holds {len(self.tasks)} tasks but the episode needs {count}; "
+                "lower env.num_tasks (paper mode needs num_tasks + queue_len)"
+            )
+        return self.tasks[:count].copy()
+
+
+def load_task_csv(path: str | Path) -> FixedTasks:
+    """Read a task list from a CSV file with header ``ox,oy,dx,dy``.
+
+    Raises:
+        TaskFileError: The file is missing, has no such header, or a row is malformed.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise TaskFileError(f"task file not found: {path}")
+    with path.open(newline="") as fh:
+        reader = csv.reader(fh)
+        header = [h.strip().lower() for h in next(reader, [])]
+        if header != ["ox", "oy", "dx", "dy"]:
+            raise TaskFileError(f"{path}: first line must be the header 'ox,oy,dx,dy'")
+        rows = []
+        for lineno, row in enumerate(reader, start=2):
+            if not any(cell.strip() for cell in row):
+                continue
+            try:
+                values = [int(cell) for cell in row]
+            except ValueError:
+                raise TaskFileError(f"{path}:{lineno}: expected 4 integers, got {row}") from None
+            if len(values) != 4:
+                raise TaskFileError(f"{path}:{lineno}: expected 4 integers, got {row}")
+            rows.append(values)
+    if not rows:
+        raise TaskFileError(f"{path}: no tasks")
+    return FixedTasks(rows, name=str(path))
+
+
+def _centres(centres: Sequence[Sequence[float]], key: str) -> np.ndarray:
+    arr = np.asarray(centres, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0:
+        raise ConfigError(f"tasks.{key} must be a non-empty list of [x, y] pairs")
+    return arr
