@@ -80,7 +80,7 @@ returns the grid as text.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -105,10 +105,14 @@ def env(**kwargs: Any) -> AECEnv:
     return wrappers.OrderEnforcingWrapper(raw_env(**kwargs))
 
 
-class raw_env(AECEnv):  # noqa: N801 (PettingZoo naming convention)
+class raw_env(AECEnv):
     """The unwrapped warehouse AEC environment; see the module docstring."""
 
-    metadata = {"name": "rtaw_warehouse_v0", "render_modes": ["ansi"], "is_parallelizable": False}
+    metadata: ClassVar[dict[str, Any]] = {
+        "name": "rtaw_warehouse_v0",
+        "render_modes": ["ansi"],
+        "is_parallelizable": False,
+    }
 
     def __init__(
         self,
@@ -150,7 +154,9 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo naming convention)
         self._observation_space = spaces.Dict(
             {
                 "robots": spaces.Box(0.0, np.array([[1, 1, inf]] * m, np.float32), (m, 3)),
-                "tasks": spaces.Box(0.0, np.array([[1, 1, 1, 1, inf, inf]] * n, np.float32), (n, 6)),
+                "tasks": spaces.Box(
+                    0.0, np.array([[1, 1, 1, 1, inf, inf]] * n, np.float32), (n, 6)
+                ),
                 "agent": spaces.Box(0.0, np.array([1, 1, inf], np.float32), (3,)),
                 "action_mask": spaces.Box(0, 1, (n,), np.int8),
             }
@@ -160,7 +166,7 @@ class raw_env(AECEnv):  # noqa: N801 (PettingZoo naming convention)
         self._zero_mask = np.zeros(n, dtype=np.int8)
 
     @property
-    def navigator(self):  # noqa: ANN201 (re-exported for policies that need distances)
+    def navigator(self):
         """The simulator's navigator (RBTS uses it to measure other robots' distances)."""
         return self.sim.navigator
 

@@ -15,7 +15,9 @@ BASELINES: dict[str, type[BaselinePolicy]] = {
 }
 
 
-def make_baseline(name: str, navigator: Navigator | None = None, scale: float = 1.0) -> BaselinePolicy:
+def make_baseline(
+    name: str, navigator: Navigator | None = None, scale: float = 1.0
+) -> BaselinePolicy:
     """Build the baseline registered as ``name``.
 
     Raises:

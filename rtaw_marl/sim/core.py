@@ -81,7 +81,9 @@ class SimConfig:
                 f"got {self.episode_mode!r}"
             )
         if self.reward not in REWARDS:
-            raise ConfigError(f"env.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}")
+            raise ConfigError(
+                f"env.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}"
+            )
         if not self.noise_var >= 0:
             raise ConfigError(f"env.noise_var must be >= 0, got {self.noise_var}")
         if not np.isfinite(self.noise_mean):
@@ -265,7 +267,9 @@ class WarehouseSim:
         try:
             slot = int(action)
         except (TypeError, ValueError):
-            raise InvalidActionError(f"action must be an integer slot index, got {action!r}") from None
+            raise InvalidActionError(
+                f"action must be an integer slot index, got {action!r}"
+            ) from None
         if not (0 <= slot < self.queue_len and slot == action):
             raise InvalidActionError(
                 f"action {action!r} is not a queue slot (0..{self.queue_len - 1})"

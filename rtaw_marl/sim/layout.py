@@ -240,13 +240,13 @@ def _parse_cfg(text: str, path: Path) -> np.ndarray:
 def _parse_movingai(text: str, path: Path) -> np.ndarray:
     lines = text.splitlines()
     header: dict[str, str] = {}
-    for lineno, line in enumerate(lines, start=1):
-        if line.strip().lower() == "map":
-            break
+    map_line = next((i for i, line in enumerate(lines) if line.strip().lower() == "map"), None)
+    if map_line is None:
+        raise LayoutError(f"{path}: no 'map' line; not a MovingAI .map file")
+    for line in lines[:map_line]:
         key, _, value = line.strip().partition(" ")
         header[key.lower()] = value.strip()
-    else:
-        raise LayoutError(f"{path}: no 'map' line; not a MovingAI .map file")
+    lineno = map_line + 1
     try:
         height, width = int(header["height"]), int(header["width"])
     except (KeyError, ValueError) as exc:

@@ -88,7 +88,11 @@ class Navigator(ABC):
         """Cells ``int64 [L, 2]`` visited from ``a`` to ``b``, both ends included."""
 
     def check_connected(self, cells: np.ndarray, what: str) -> None:
-        """Raise :class:`LayoutError` unless all cells of ``cells [K, 2]`` are mutually reachable."""
+        """Raise :class:`LayoutError` unless all ``cells [K, 2]`` are mutually reachable.
+
+        The base navigator ignores obstacles, so every pair is reachable.
+        """
+        del cells, what
 
 
 class DirectNavigator(Navigator):

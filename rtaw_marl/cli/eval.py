@@ -1,0 +1,60 @@
+"""``rtaw-eval``: evaluate policies on seeded episodes and write ``results.json``.
+
+Examples::
+
+    rtaw-eval scenario=poc policy=[mpdm,rbts]
+    rtaw-eval env.num_robots=100 env.num_tasks=500 navigator=astar layout=open seeds=[0,1,2]
+    rtaw-eval --multirun env.num_robots=10,100 navigator=direct,astar
+"""
+
+from __future__ import annotations
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig, OmegaConf
+from tqdm import tqdm
+
+from rtaw_marl.cli import CONF_DIR
+from rtaw_marl.cli.common import exit_on_user_error, sim_from_cfg
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
+from rtaw_marl.policies import make_baseline
+
+
+@exit_on_user_error
+def run(cfg: DictConfig) -> dict:
+    """Evaluate ``cfg.policy`` on ``cfg.seeds`` and write the results; returns them."""
+    names = [cfg.policy] if isinstance(cfg.policy, str) else list(cfg.policy)
+    seeds = [cfg.seeds] if isinstance(cfg.seeds, int) else list(cfg.seeds)
+    if not names:
+        raise ConfigError("policy must name at least one policy")
+    if not seeds or not all(isinstance(s, int) for s in seeds):
+        raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
+    sim = sim_from_cfg(cfg)
+    policies = {
+        name: make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale) for name in names
+    }
+    total = len(policies) * len(seeds) * sim.config.num_tasks
+    with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:
+        results = evaluate(sim, policies, seeds, on_decisions=bar.update)
+
+    print(format_table(results))
+    output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json"
+    payload = {
+        "config": OmegaConf.to_container(cfg, resolve=True),
+        "seeds": seeds,
+        "policies": results,
+    }
+    path = write_json_atomic(output, payload)
+    print(f"results: {path}")
+    return payload
+
+
+@hydra.main(config_path=str(CONF_DIR), config_name="eval", version_base="1.3")
+def main(cfg: DictConfig) -> None:
+    """Console entry point."""
+    run(cfg)
+
+
+if __name__ == "__main__":
+    main()
