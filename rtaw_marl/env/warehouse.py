@@ -89,6 +89,7 @@ from pettingzoo.utils import wrappers
 
 from rtaw_marl.env.render import render_ansi
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.features import robot_features, task_features
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.sim.tasks import TaskStream
@@ -202,41 +203,28 @@ class raw_env(AECEnv):
     # ------------------------------------------------------------------ observe
     def observe(self, agent: str) -> dict[str, np.ndarray]:
         robot = self._index[agent]
-        self._refresh_cache()
-        tasks = self._task_rows.copy()
         sim = self.sim
-        if robot == sim.robot:
-            k = sim.robot_distances()
-            mask = self._mask
+        self._refresh_cache()
+        if robot == sim.robot and not sim.done:
+            distance, mask = sim.robot_distances(), self._mask
         else:
-            k = sim.robot_distances(robot)
-            mask = self._zero_mask.copy()
-        tasks[:, 4] = np.where(sim.queue_mask, k / self.scale, 0.0)
+            distance, mask = sim.robot_distances(robot), self._zero_mask.copy()
         return {
             "robots": self._robot_rows,
-            "tasks": tasks,
+            "tasks": task_features(
+                sim.queue_rows, sim.queue_length, distance, sim.queue_mask, self.scale
+            ),
             "agent": self._robot_rows[robot].copy(),
             "action_mask": mask,
         }
 
     def _refresh_cache(self) -> None:
-        """Per-decision features shared by all agents' observations."""
+        """Per-decision robot features shared by all agents' observations."""
         sim = self.sim
         if self._cache_decision == sim.decisions:
             return
-        rows = np.empty((sim.num_robots, 3), dtype=np.float32)
-        rows[:, :2] = sim.robot_xy
-        rows[:, 2] = np.maximum(sim.robot_remaining(), 0.0)
-        rows /= self.scale
-        self._robot_rows = rows
-        task_rows = np.zeros((sim.queue_len, 6), dtype=np.float32)
-        task_rows[:, :4] = sim.queue_tasks()
-        task_rows[:, 5] = sim.queue_lengths()
-        task_rows /= self.scale
-        self._task_rows = task_rows
-        self._mask = (sim.queue_mask if not sim.done else np.zeros_like(sim.queue_mask)).astype(
-            np.int8
-        )
+        self._robot_rows = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, self.scale)
+        self._mask = sim.queue_mask.astype(np.int8)
         self._cache_decision = sim.decisions
 
     # ------------------------------------------------------------------ step

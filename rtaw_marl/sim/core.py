@@ -33,7 +33,7 @@ from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
 from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.tasks import TaskStream
 
-__all__ = ["EPISODE_MODES", "REWARDS", "SimConfig", "WarehouseSim"]
+__all__ = ["EPISODE_MODES", "REWARDS", "SimBuffers", "SimConfig", "WarehouseSim"]
 
 EPISODE_MODES = ("drain", "paper")
 #: Reward = minus this quantity of the chosen task (the paper's reward ablation).
@@ -106,6 +106,50 @@ class SimConfig:
             object.__setattr__(self, "robot_free_times", times)
 
 
+@dataclass(frozen=True)
+class SimBuffers:
+    """Arrays a simulator keeps its state in, overwritten in place at every reset and step.
+
+    A batched env passes views into ``[B, ...]`` arrays here, so features of all ``B``
+    simulators are computed with one vectorised expression.
+
+    Attributes:
+        robot_xy: ``int64 [M, 2]`` cell of each robot when next free.
+        robot_free_at: ``float64 [M]`` time each robot becomes free.
+        queue_mask: ``bool [N]`` which slots hold a task.
+        queue_rows: ``int64 [N, 4]`` ``(ox, oy, dx, dy)`` per slot, zeros when empty.
+        queue_length: ``float64 [N]`` task length per slot, 0 when empty.
+    """
+
+    robot_xy: np.ndarray
+    robot_free_at: np.ndarray
+    queue_mask: np.ndarray
+    queue_rows: np.ndarray
+    queue_length: np.ndarray
+
+    @classmethod
+    def allocate(cls, num_robots: int, queue_len: int) -> SimBuffers:
+        """Fresh buffers for ``num_robots`` robots and ``queue_len`` slots."""
+        return cls(
+            robot_xy=np.zeros((num_robots, 2), dtype=np.int64),
+            robot_free_at=np.zeros(num_robots, dtype=np.float64),
+            queue_mask=np.zeros(queue_len, dtype=bool),
+            queue_rows=np.zeros((queue_len, 4), dtype=np.int64),
+            queue_length=np.zeros(queue_len, dtype=np.float64),
+        )
+
+    def check(self, num_robots: int, queue_len: int) -> None:
+        """Raise ConfigError unless shapes and dtypes fit ``num_robots`` and ``queue_len``."""
+        expected = SimBuffers.allocate(num_robots, queue_len)
+        for f in fields(self):
+            got, want = getattr(self, f.name), getattr(expected, f.name)
+            if got.shape != want.shape or got.dtype != want.dtype:
+                raise ConfigError(
+                    f"buffer {f.name} must be {want.dtype} {want.shape}, "
+                    f"got {got.dtype} {got.shape}"
+                )
+
+
 class WarehouseSim:
     """One warehouse episode at a time, stepped one decision at a time.
 
@@ -114,6 +158,7 @@ class WarehouseSim:
         layout: The grid.
         navigator: Distances on ``layout``.
         tasks: The task stream.
+        buffers: Where to keep the robot and queue state; allocated when ``None``.
 
     Public state after :meth:`reset` (read-only views; do not modify):
         robot: Index of the selected robot.
@@ -122,6 +167,8 @@ class WarehouseSim:
         robot_free_at: ``float64 [M]`` time each robot becomes free.
         queue_ids: ``int64 [N]`` task id per slot, ``-1`` for an empty slot.
         queue_mask: ``bool [N]`` which slots hold a task (the legal actions).
+        queue_rows: ``int64 [N, 4]`` task row per slot, zeros for an empty slot.
+        queue_length: ``float64 [N]`` task length per slot, 0 for an empty slot.
         tasks: ``int64 [T, 4]`` every task of the episode in arrival order.
         task_length: ``float64 [T]`` origin -> destination distance per task (NaN until
             the task enters the queue).
@@ -129,7 +176,12 @@ class WarehouseSim:
     """
 
     def __init__(
-        self, config: SimConfig, layout: Layout, navigator: Navigator, tasks: TaskStream
+        self,
+        config: SimConfig,
+        layout: Layout,
+        navigator: Navigator,
+        tasks: TaskStream,
+        buffers: SimBuffers | None = None,
     ) -> None:
         if navigator.layout is not layout:
             raise ConfigError("navigator was built for a different layout")
@@ -155,6 +207,15 @@ class WarehouseSim:
         self._reward_code = REWARDS.index(config.reward)
         self._slots = navigator.target_slots(config.queue_len)
         self._noise_std = float(np.sqrt(config.noise_var))
+        if buffers is None:
+            buffers = SimBuffers.allocate(config.num_robots, config.queue_len)
+        buffers.check(config.num_robots, config.queue_len)
+        self.robot_xy = buffers.robot_xy
+        self.robot_free_at = buffers.robot_free_at
+        self.queue_mask = buffers.queue_mask
+        self.queue_rows = buffers.queue_rows
+        self.queue_length = buffers.queue_length
+        self.queue_ids = np.full(config.queue_len, -1, dtype=np.int64)
         self.done = True
         self.truncated = False
 
@@ -184,13 +245,9 @@ class WarehouseSim:
         self.tasks = tasks
         # Lengths are measured when a task enters the queue, from its slot's field.
         self.task_length = np.full(total, np.nan)
-        self.robot_xy = starts.copy()
+        self.robot_xy[:] = starts
         self.robot_start_xy = starts.copy()
-        self.robot_free_at = (
-            np.asarray(cfg.robot_free_times, dtype=np.float64)
-            if cfg.robot_free_times is not None
-            else np.zeros(m, dtype=np.float64)
-        )
+        self.robot_free_at[:] = cfg.robot_free_times if cfg.robot_free_times is not None else 0.0
         self.robot_busy = np.zeros(m, dtype=np.float64)
         if self._noise_std > 0:
             self._noise = noise_rng.normal(cfg.noise_mean, self._noise_std, size=cfg.num_tasks)
@@ -204,11 +261,11 @@ class WarehouseSim:
         self.task_finished = np.full(total, np.nan)
         self.task_robot = np.full(total, -1, dtype=np.int64)
 
-        self.queue_ids = np.full(n, -1, dtype=np.int64)
-        self.queue_mask = np.zeros(n, dtype=bool)
+        self.queue_ids[:] = -1
+        self.queue_mask[:] = False
+        self.queue_rows[:] = 0
+        self.queue_length[:] = 0.0
         first = min(n, total)
-        self.queue_ids[:first] = np.arange(first)
-        self.queue_mask[:first] = True
         self.task_arrival[:first] = 0.0
         for slot in range(first):
             self._enqueue(slot, slot)
@@ -240,12 +297,12 @@ class WarehouseSim:
         return self._slots.distances_from(self.robot_xy)
 
     def queue_tasks(self) -> np.ndarray:
-        """``int64 [N, 4]`` task rows per slot; rows of empty slots are 0."""
-        return np.where(self.queue_mask[:, None], self.tasks[self.queue_ids], 0)
+        """A copy of :attr:`queue_rows`: ``int64 [N, 4]``, zeros for empty slots."""
+        return self.queue_rows.copy()
 
     def queue_lengths(self) -> np.ndarray:
-        """``float64 [N]`` origin -> destination distance per slot; 0 for empty slots."""
-        return np.where(self.queue_mask, self.task_length[self.queue_ids], 0.0)
+        """A copy of :attr:`queue_length`: ``float64 [N]``, 0 for empty slots."""
+        return self.queue_length.copy()
 
     def robot_remaining(self) -> np.ndarray:
         """``float64 [M]`` time until each robot is free (0 for the selected robot)."""
@@ -315,6 +372,8 @@ class WarehouseSim:
         if new >= len(self.tasks):
             self.queue_ids[slot] = -1
             self.queue_mask[slot] = False
+            self.queue_rows[slot] = 0
+            self.queue_length[slot] = 0.0
             return
         if self.stream.refill_same_slot:
             # The slot keeps its task: the paper's two-task queue always holds both tasks.
@@ -324,10 +383,15 @@ class WarehouseSim:
         self._enqueue(slot, new)
 
     def _enqueue(self, slot: int, task: int) -> None:
-        ox, oy, dx, dy = (int(v) for v in self.tasks[task])
+        row = self.tasks[task]
+        ox, oy, dx, dy = row.tolist()
         self._slots.set(slot, ox, oy)
-        self.task_length[task] = self._slots.distance_to(slot, dx, dy)
+        length = self._slots.distance_to(slot, dx, dy)
+        self.task_length[task] = length
         self.queue_ids[slot] = task
+        self.queue_mask[slot] = True
+        self.queue_rows[slot] = row
+        self.queue_length[slot] = length
 
     def _select_next_robot(self) -> None:
         self.robot = int(self.robot_free_at.argmin())
