@@ -204,6 +204,7 @@ class WarehouseSim:
         self.num_robots = config.num_robots
         self.queue_len = config.queue_len
         self._paper = config.episode_mode == "paper"
+        self._num_decisions = config.num_tasks
         self._reward_code = REWARDS.index(config.reward)
         self._slots = navigator.target_slots(config.queue_len)
         self._noise_std = float(np.sqrt(config.noise_var))
@@ -321,6 +322,8 @@ class WarehouseSim:
         """
         if self.done:
             raise InvalidActionError("the episode is over; call reset()")
+        if isinstance(action, (bool, np.bool_)):
+            raise InvalidActionError(f"action must be an integer slot index, got {action!r}")
         try:
             slot = int(action)
         except (TypeError, ValueError):
@@ -336,8 +339,9 @@ class WarehouseSim:
 
         robot, now = self.robot, self.time
         task = int(self.queue_ids[slot])
-        ttd = float(self.robot_distances()[slot])
-        length = float(self.task_length[task])
+        dist = self._dist if self._dist is not None else self.robot_distances()
+        ttd = float(dist[slot])
+        length = float(self.queue_length[slot])
         finish = now + ttd + length + float(self._noise[self.decisions])
         if finish < now:
             finish = now
@@ -346,16 +350,15 @@ class WarehouseSim:
         self.task_ttd[task] = ttd
         self.task_finished[task] = finish
         self.task_robot[task] = robot
-        row = self.tasks[task]
-        self.robot_xy[robot, 0] = row[2]
-        self.robot_xy[robot, 1] = row[3]
+        self.robot_xy[robot] = self.queue_rows[slot, 2:]
         self.robot_free_at[robot] = finish
-        self.robot_busy[robot] += ttd + length
+        # Busy from assignment until free again (noise included), so idle >= 0.
+        self.robot_busy[robot] += finish - now
         self._refill(slot, task, now)
 
         self.decisions += 1
         self.last_ttd = ttd
-        if self.decisions >= self.config.num_tasks:
+        if self.decisions >= self._num_decisions:
             self.done = True
             self.truncated = self._paper
         else:

@@ -10,8 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ROBOT_FEATURES", "TASK_FEATURES", "robot_features", "task_features"]
+__all__ = [
+    "OBSERVATION_KEYS",
+    "ROBOT_FEATURES",
+    "TASK_FEATURES",
+    "robot_features",
+    "task_features",
+]
 
+#: Observation keys of the free robot's decision, in the networks' argument order.
+OBSERVATION_KEYS = ("robots", "tasks", "agent", "action_mask")
 #: Columns of the robot features.
 ROBOT_FEATURES = ("x", "y", "time_until_free")
 #: Columns of the task features.

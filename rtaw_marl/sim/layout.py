@@ -221,15 +221,19 @@ def _parse_cfg(text: str, path: Path) -> np.ndarray:
         obsthresh = float(header.get("obsthresh", ["1"])[0])
     except (KeyError, ValueError) as exc:
         raise LayoutError(f"{path}: bad or missing 'discretization(cells): W H' header") from exc
-    rows = [line.split() for line in lines[body_start:] if line.strip()]
-    if len(rows) != height:
-        raise LayoutError(f"{path}: header says {height} rows, found {len(rows)}")
-    for i, row in enumerate(rows):
+    numbered = [
+        (body_start + 1 + i, line.split())
+        for i, line in enumerate(lines[body_start:])
+        if line.strip()
+    ]
+    if len(numbered) != height:
+        raise LayoutError(f"{path}: header says {height} rows, found {len(numbered)}")
+    for i, (lineno, row) in enumerate(numbered):
         if len(row) != width:
             raise LayoutError(
-                f"{path}: row {i} (line {body_start + 1 + i}) has {len(row)} cells, "
-                f"expected {width}"
+                f"{path}: row {i} (line {lineno}) has {len(row)} cells, expected {width}"
             )
+    rows = [row for _, row in numbered]
     try:
         values = np.array(rows, dtype=float)
     except ValueError as exc:
@@ -251,8 +255,7 @@ def _parse_movingai(text: str, path: Path) -> np.ndarray:
         height, width = int(header["height"]), int(header["width"])
     except (KeyError, ValueError) as exc:
         raise LayoutError(f"{path}: bad or missing 'height'/'width' header") from exc
-    body = [line.rstrip("\r\n") for line in lines[lineno:] if line.strip()]
-    grid = _parse_rows(body, path, first_line=lineno + 1, blocked=_BLOCKED_MAP_CHARS)
+    grid = _parse_rows(lines[lineno:], path, first_line=lineno + 1, blocked=_BLOCKED_MAP_CHARS)
     if grid.shape != (height, width):
         raise LayoutError(
             f"{path}: header says {width}x{height}, grid is {grid.shape[1]}x{grid.shape[0]}"
@@ -263,18 +266,17 @@ def _parse_movingai(text: str, path: Path) -> np.ndarray:
 def _parse_rows(
     rows: list[str], path: Path, first_line: int, blocked: frozenset[str] = frozenset("@")
 ) -> np.ndarray:
-    rows = [row.rstrip() for row in rows if row.strip()]
-    if not rows:
+    # Keep each row's line number in the file, blank lines included, for error messages.
+    numbered = [(first_line + i, row.rstrip()) for i, row in enumerate(rows) if row.strip()]
+    if not numbered:
         raise LayoutError(f"{path}: empty layout")
-    width = len(rows[0])
-    for i, row in enumerate(rows):
+    width = len(numbered[0][1])
+    for lineno, row in numbered:
         if len(row) != width:
-            raise LayoutError(
-                f"{path}: line {first_line + i} has {len(row)} cells, expected {width}"
-            )
-    chars = np.array([list(row) for row in rows])
+            raise LayoutError(f"{path}: line {lineno} has {len(row)} cells, expected {width}")
+    chars = np.array([list(row) for _, row in numbered])
     if blocked == frozenset("@"):
-        unknown = set(np.unique(chars)) - {".", "@"}
+        unknown = {str(c) for c in np.unique(chars)} - {".", "@"}
         if unknown:
             raise LayoutError(
                 f"{path}: unknown cell characters {sorted(unknown)}; ASCII layouts use "

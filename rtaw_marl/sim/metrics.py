@@ -19,8 +19,8 @@ class EpisodeMetrics:
         makespan: Time at which the last served task was completed (the robot's free
             time after it, completion noise included).
         task_length: Summed origin -> destination travel of the served tasks.
-        idle_mean: Mean over robots of the time within ``[0, makespan]`` a robot spent
-            not travelling (completion noise, and after its last task).
+        idle_mean: Mean over robots of the time within ``[0, makespan]`` a robot had no
+            task (before its first task and after its last).
         idle_max: Largest per-robot idle time.
         wait_mean: Mean over served tasks of the time from arrival in the queue to pickup.
         wait_max: Longest such wait (starvation shows here).
@@ -62,7 +62,8 @@ def compute_metrics(
         arrival: ``float [T]`` time each task entered the queue.
         assigned: ``float [T]`` decision time at which each task was assigned.
         finished: ``float [T]`` free time of the robot after each task.
-        robot_busy: ``float [M]`` total travel time of each robot.
+        robot_busy: ``float [M]`` total time each robot spent on tasks, from assignment
+            until it was free again.
         decisions: Number of decisions taken.
 
     Returns:

@@ -113,6 +113,8 @@ class DirectNavigator(Navigator):
         return _DirectSlots(size)
 
     def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
+        if tuple(a) == tuple(b):
+            return np.array([a], dtype=np.int64)
         return np.array([a, b], dtype=np.int64)
 
 

@@ -131,10 +131,13 @@ class DesignatedTasks(TaskStream):
         same = np.flatnonzero((origin == dest).all(axis=1))
         for _ in range(_MAX_REDRAWS):
             if not same.size:
-                break
+                return np.concatenate([origin, dest], axis=1)
             dest[same] = self._draw(rng, layout, main, self.delivery_centres, same.size)
             same = same[(origin[same] == dest[same]).all(axis=1)]
-        return np.concatenate([origin, dest], axis=1)
+        raise ConfigError(
+            f"designated tasks: cannot draw a destination different from origin "
+            f"({int(origin[same[0], 0])}, {int(origin[same[0], 1])}); widen tasks.sigma"
+        )
 
     def _draw(
         self,

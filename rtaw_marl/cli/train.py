@@ -1,0 +1,44 @@
+"""``rtaw-train``: train the RTAW policy with PPO (TorchRL).
+
+Examples::
+
+    rtaw-train scenario=poc frames=30000
+    rtaw-train env.num_robots=10 frames=500000 collector.workers=2
+    rtaw-train resume=outputs/train/<date>/<time>/checkpoints/last.pt frames=1000000
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig
+
+from rtaw_marl.cli import CONF_DIR
+from rtaw_marl.cli.common import exit_on_user_error
+
+
+@exit_on_user_error
+def run(cfg: DictConfig) -> None:
+    """Train as configured and print where the checkpoints are."""
+    from rtaw_marl.training.ppo import train
+
+    run_dir = Path(cfg.output_dir or HydraConfig.get().runtime.output_dir)
+    result = train(cfg, run_dir)
+    gap = 100.0 * (result.mpdm_ttd - result.best_ttd) / result.mpdm_ttd
+    print(
+        f"best greedy TTD {result.best_ttd:.2f} vs MPDM {result.mpdm_ttd:.2f} "
+        f"({gap:+.1f}%) after {result.frames} frames"
+    )
+    print(f"checkpoints: {result.best_checkpoint} {result.last_checkpoint}")
+
+
+@hydra.main(config_path=str(CONF_DIR), config_name="train", version_base="1.3")
+def main(cfg: DictConfig) -> None:
+    """Console entry point."""
+    run(cfg)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,123 @@
+"""Self-describing checkpoints, written atomically.
+
+A checkpoint is a ``torch.save`` dict:
+
+``format``        ``"rtaw_marl.checkpoint/1"``
+``features``      the observation layout it was trained on (robot/task columns)
+``model``         ``{"actor": state_dict, "critic": state_dict}`` and ``model_config``
+``optimizer``     the optimizer state
+``config``        the resolved training config
+``versions``      library versions (python, torch, torchrl, tensordict, numpy, rtaw_marl)
+``frames``        frames collected so far; ``iteration``: updates done
+``eval``          the latest evaluation figures; ``command``: the command line
+
+It is written to a temporary file in the same folder, fsynced and renamed over the
+target, so a kill at any moment leaves the previous or the new checkpoint, both loadable.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import tensordict
+import torch
+import torchrl
+
+import rtaw_marl
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
+from rtaw_marl.sim.features import ROBOT_FEATURES, TASK_FEATURES
+
+__all__ = [
+    "FORMAT",
+    "build_networks",
+    "library_versions",
+    "load_checkpoint",
+    "save_checkpoint",
+]
+
+FORMAT = "rtaw_marl.checkpoint/1"
+FEATURES = {"robots": list(ROBOT_FEATURES), "tasks": list(TASK_FEATURES)}
+
+
+def library_versions() -> dict[str, str]:
+    """Versions of the libraries a checkpoint depends on."""
+    return {
+        "python": platform.python_version(),
+        "torch": torch.__version__,
+        "torchrl": torchrl.__version__,
+        "tensordict": tensordict.__version__,
+        "numpy": np.__version__,
+        "rtaw_marl": rtaw_marl.__version__,
+    }
+
+
+def save_checkpoint(path: str | Path, payload: dict[str, Any]) -> Path:
+    """Atomically write ``payload`` (plus format, features and versions) to ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    full = {
+        "format": FORMAT,
+        "features": FEATURES,
+        "versions": library_versions(),
+        "command": sys.argv,
+        **payload,
+    }
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            torch.save(full, fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_checkpoint(path: str | Path) -> dict[str, Any]:
+    """Load and validate a checkpoint.
+
+    Raises:
+        ConfigError: The file is missing, is not an rtaw_marl checkpoint, or was trained
+            on a different observation layout than this version produces.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"checkpoint not found: {path}")
+    try:
+        ckpt = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as exc:  # torch raises many types for a corrupt file
+        raise ConfigError(f"cannot read checkpoint {path}: {exc}") from exc
+    if not isinstance(ckpt, dict) or ckpt.get("format") != FORMAT:
+        raise ConfigError(f"{path} is not an rtaw_marl checkpoint (expected format {FORMAT})")
+    if ckpt.get("features") != FEATURES:
+        raise ConfigError(
+            f"checkpoint {path} was trained on observation features {ckpt.get('features')}, "
+            f"this version produces {FEATURES}"
+        )
+    return ckpt
+
+
+def build_networks(model_config: dict[str, int]) -> tuple[RTAWActor, RTAWCritic]:
+    """Fresh actor and critic networks for ``model_config`` (``embed_dim``, ``head_dim``,
+    ``critic_hidden``)."""
+    allowed = {"embed_dim", "head_dim", "critic_hidden"}
+    unknown = sorted(set(model_config) - allowed)
+    if unknown:
+        raise ConfigError(f"unknown model keys {unknown}; available: {', '.join(sorted(allowed))}")
+    embed = int(model_config.get("embed_dim", 16))
+    actor = RTAWActor(
+        len(ROBOT_FEATURES), len(TASK_FEATURES), embed, int(model_config.get("head_dim", 8))
+    )
+    critic = RTAWCritic(
+        len(ROBOT_FEATURES), len(TASK_FEATURES), embed, int(model_config.get("critic_hidden", 32))
+    )
+    return actor, critic

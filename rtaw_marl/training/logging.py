@@ -1,0 +1,77 @@
+"""Run logging (CSV by default, TensorBoard on request) and the training-curve plot."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from rtaw_marl.errors import ConfigError
+
+__all__ = ["LOGGERS", "RunLogger", "plot_training_curve"]
+
+LOGGERS = ("csv", "tensorboard", "none")
+
+
+class RunLogger:
+    """Scalars through torchrl's loggers, into ``run_dir/logs``.
+
+    Args:
+        run_dir: The run folder.
+        kind: ``"csv"`` (default), ``"tensorboard"`` or ``"none"``.
+    """
+
+    def __init__(self, run_dir: Path, kind: str = "csv") -> None:
+        if kind not in LOGGERS:
+            raise ConfigError(f"logger must be one of {', '.join(LOGGERS)}, got {kind!r}")
+        self._logger = None
+        if kind == "csv":
+            from torchrl.record.loggers.csv import CSVLogger
+
+            self._logger = CSVLogger(exp_name="train", log_dir=str(run_dir / "logs"))
+        elif kind == "tensorboard":
+            try:
+                from torchrl.record.loggers.tensorboard import TensorboardLogger
+
+                self._logger = TensorboardLogger(exp_name="train", log_dir=str(run_dir / "logs"))
+            except ImportError as exc:
+                raise ConfigError(
+                    "logger=tensorboard needs the tensorboard package: pip install tensorboard"
+                ) from exc
+
+    def log(self, scalars: Mapping[str, float], step: int) -> None:
+        """Log every scalar at ``step`` (frames collected)."""
+        if self._logger is None:
+            return
+        for name, value in scalars.items():
+            self._logger.log_scalar(name, float(value), step=step)
+
+    def close(self) -> None:
+        """Flush the CSV files (torchrl's CSV logger writes on each call)."""
+
+
+def plot_training_curve(history: list[dict[str, float]], path: Path) -> Path | None:
+    """Greedy evaluation TTD against frames, with MPDM's TTD on the same seeds.
+
+    Returns:
+        The PNG path, or ``None`` when there is nothing to plot.
+    """
+    if not history:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    frames = [row["frames"] for row in history]
+    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=120)
+    ax.plot(frames, [row["ttd"] for row in history], marker="o", label="RTAW (greedy)")
+    ax.axhline(history[0]["mpdm_ttd"], color="tab:red", linestyle="--", label="MPDM")
+    ax.set_xlabel("frames (decisions)")
+    ax.set_ylabel("mean episode TTD (s)")
+    ax.set_title("Evaluation on fixed seeds")
+    ax.legend()
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
