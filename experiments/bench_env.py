@@ -108,7 +108,6 @@ class Row:
     tasks: int
     samples: list[float]
     unit: str
-    note: str = ""
 
     @property
     def median(self) -> float:
@@ -209,7 +208,6 @@ def bench_full_episode(sizes: Sizes, policy_cls: type[BaselinePolicy]) -> tuple[
         sizes.episode_tasks,
         samples,
         "s / episode",
-        "incl. navigator build, cold field cache",
     )
     return row, warm
 
@@ -278,14 +276,14 @@ def git_revision() -> str:
     return f"{head} + uncommitted changes in rtaw_marl/" if dirty else head
 
 
-def machine_lines() -> list[str]:
-    """Date, machine, code revision and library versions."""
+def machine_lines(started: dt.datetime) -> list[str]:
+    """Start date, machine, code revision and library versions."""
     import numba
     import pettingzoo
 
     return [
         f"- code: rtaw_marl {rtaw_marl.__version__}, git {git_revision()}",
-        f"- date: {dt.datetime.now().astimezone().isoformat(timespec='seconds')}",
+        f"- date: {started.isoformat(timespec='seconds')} (start of the run)",
         f"- machine: {platform.platform()}, {platform.machine()}, "
         f"os.cpu_count()={os.cpu_count()}, processor={platform.processor() or 'n/a'}",
         f"- python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
@@ -331,6 +329,7 @@ def main(argv: Sequence[str] | None = None) -> str:
     else:
         notes.append(f"- {USC_64} not found: the usc_64 rows were skipped.")
 
+    started = dt.datetime.now().astimezone()
     print(f"benchmarking ({'quick' if args.quick else 'full'})...", file=sys.stderr, flush=True)
     episode_mpdm, cold = bench_full_episode(sizes, MPDM)
     _progress(episode_mpdm)
@@ -340,6 +339,11 @@ def main(argv: Sequence[str] | None = None) -> str:
     rows += [episode_mpdm, episode_rbts]
 
     notes.append(
+        "- episode rows: wall time of one whole episode including building the layout and a "
+        "fresh A* navigator (cold distance-field cache); throughput rows reuse one "
+        "simulator/env per setting, so their field cache is warm after the warm-up."
+    )
+    notes.append(
         f"- first MPDM episode of this process (its warm-up, incl. loading the numba BFS "
         f"kernel and all of its distance fields cold): {cold:.2f} s"
     )
@@ -347,7 +351,7 @@ def main(argv: Sequence[str] | None = None) -> str:
         [
             f"## Benchmark ({'quick smoke run' if args.quick else 'full run'})",
             "",
-            *machine_lines(),
+            *machine_lines(started),
             f"- median of {sizes.repeats} timed run(s) after 1 warm-up; queue N={QUEUE_LEN}; "
             f"{sizes.num_tasks} designated tasks per throughput episode",
             "",

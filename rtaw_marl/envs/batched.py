@@ -129,7 +129,7 @@ class BatchedWarehouseEnv(EnvBase):
 
     # ------------------------------------------------------------------ reset / step
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
-        if tensordict is not None and "_reset" in tensordict.keys():
+        if tensordict is not None and "_reset" in tensordict.keys():  # noqa: SIM118
             which = np.flatnonzero(tensordict["_reset"].reshape(self.num_envs).numpy())
         else:
             which = range(self.num_envs)

@@ -25,7 +25,8 @@ def make_actor(net: RTAWActor, keys: tuple = OBSERVATION_KEYS) -> ProbabilisticA
     Returns:
         A module writing ``"logits"``, ``"action"`` and ``"action_log_prob"``.
     """
-    prefix = keys[0][:-1] if isinstance(keys[0], tuple) else ()
+    # Outputs go next to the action mask: ("agents", ...) on the interop route.
+    prefix = keys[3][:-1] if isinstance(keys[3], tuple) else ()
     logits_key = (*prefix, "logits") if prefix else "logits"
     action_key = (*prefix, "action") if prefix else "action"
     module = TensorDictModule(net, in_keys=list(keys), out_keys=[logits_key])
@@ -41,7 +42,8 @@ def make_actor(net: RTAWActor, keys: tuple = OBSERVATION_KEYS) -> ProbabilisticA
 
 def make_critic(net: RTAWCritic, keys: tuple = OBSERVATION_KEYS) -> ValueOperator:
     """A value module writing ``"state_value"`` (next to the observation keys)."""
-    prefix = keys[0][:-1] if isinstance(keys[0], tuple) else ()
+    # Outputs go next to the action mask: ("agents", ...) on the interop route.
+    prefix = keys[3][:-1] if isinstance(keys[3], tuple) else ()
     out = (*prefix, "state_value") if prefix else "state_value"
     return ValueOperator(net, in_keys=list(keys), out_keys=[out])
 

@@ -31,6 +31,13 @@ from rtaw_marl.models.rtaw import RTAWActor
 from rtaw_marl.policies import MPDM
 from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.training.checkpoint import build_networks, load_checkpoint, save_checkpoint
+from rtaw_marl.training.interop import (
+    BATCHED_KEYS,
+    INTEROP_KEYS,
+    TrainKeys,
+    acting_reward,
+    make_interop_env,
+)
 from rtaw_marl.training.logging import RunLogger, plot_training_curve
 
 __all__ = ["TrainResult", "greedy_ttd", "train"]
@@ -86,12 +93,14 @@ def _check(cfg: DictConfig) -> None:
             f"algo.frames_per_batch={algo.frames_per_batch} must be a multiple of "
             f"algo.minibatch_size={algo.minibatch_size}"
         )
-    per_collect = cfg.collector.workers * cfg.collector.envs_per_worker
+    per_collect = cfg.collector.workers * (1 if cfg.interop else cfg.collector.envs_per_worker)
     if algo.frames_per_batch % per_collect:
         raise ConfigError(
             f"algo.frames_per_batch={algo.frames_per_batch} must be a multiple of "
             f"collector.workers * collector.envs_per_worker = {per_collect}"
         )
+    if cfg.interop and cfg.collector.workers != 1:
+        raise ConfigError("interop=true runs one PettingZooWrapper env: set collector.workers=1")
     if cfg.frames < algo.frames_per_batch:
         raise ConfigError(f"frames={cfg.frames} is less than one batch ({algo.frames_per_batch})")
 
@@ -107,9 +116,13 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
     spec = _env_spec(cfg)
 
     # --- networks, loss, optimiser ------------------------------------------------
+    keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
     model_cfg = OmegaConf.to_container(cfg.model, resolve=True)
     actor_net, critic_net = build_networks(model_cfg)
-    actor, critic = make_actor(actor_net), make_critic(critic_net)
+    actor, critic = (
+        make_actor(actor_net, keys.observation),
+        make_critic(critic_net, keys.observation),
+    )
     loss_module = ClipPPOLoss(
         actor,
         critic,
@@ -120,23 +133,25 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
         normalize_advantage=algo.normalize_advantage,
     )
     loss_module.set_keys(
-        action="action",
-        sample_log_prob="action_log_prob",
-        value="state_value",
-        reward="reward",
-        done="done",
-        terminated="terminated",
-        advantage="advantage",
-        value_target="value_target",
+        action=keys.action,
+        sample_log_prob=keys.log_prob,
+        value=keys.value,
+        reward=keys.reward,
+        done=keys.done,
+        terminated=keys.terminated,
+        advantage=keys.advantage,
+        value_target=keys.value_target,
     )
+    # Interop route: only the acting robot's row of each step counts in the loss.
+    loss_module.loss_mask_key = keys.loss_mask
     gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic)
     gae.set_keys(
-        value="state_value",
-        reward="reward",
-        done="done",
-        terminated="terminated",
-        advantage="advantage",
-        value_target="value_target",
+        value=keys.value,
+        reward=keys.reward,
+        done=keys.done,
+        terminated=keys.terminated,
+        advantage=keys.advantage,
+        value_target=keys.value_target,
     )
     optim = torch.optim.Adam(loss_module.parameters(), lr=algo.lr)
 
@@ -163,16 +178,18 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
     # --- collector ------------------------------------------------------------------
     workers, envs = int(cfg.collector.workers), int(cfg.collector.envs_per_worker)
     # Env seeds depend on the resume point, so a resumed run sees new episodes.
-    make_env = [
-        partial(
-            BatchedWarehouseEnv, **spec, num_envs=envs, seed=cfg.seed * 1009 + 31 * w + iteration
-        )
-        for w in range(workers)
-    ]
-    remaining = int(cfg.frames) - frames_done
+    seeds = [int(cfg.seed) * 1009 + 31 * w + iteration for w in range(workers)]
+    if cfg.interop:
+        make_env = [partial(make_interop_env, spec, seed) for seed in seeds]
+    else:
+        make_env = [
+            partial(BatchedWarehouseEnv, **spec, num_envs=envs, seed=seed) for seed in seeds
+        ]
+    batch = int(algo.frames_per_batch)
+    remaining = max(int(cfg.frames) - frames_done, batch)
     collector_kwargs = {
-        "frames_per_batch": int(algo.frames_per_batch),
-        "total_frames": max(remaining, int(algo.frames_per_batch)),
+        "frames_per_batch": batch,
+        "total_frames": -(-remaining // batch) * batch,
         "auto_register_policy_transforms": False,
     }
     if workers == 1:
@@ -229,7 +246,6 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
         if frames_done == 0:
             checkpoint(run_eval())
         for data in collector:
-            data = data.reshape(-1) if data.ndim > 1 and workers == 1 else data
             frames_done += data.numel()
             iteration += 1
             progress = min(1.0, frames_done / int(cfg.frames))
@@ -237,8 +253,8 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
                 algo.entropy_coeff_end - algo.entropy_coeff_start
             )
             loss_module.entropy_coeff.fill_(entropy_coeff)
-            raw_reward = data["next", "reward"].mean().item()
-            stats = _update(data, gae, loss_module, optim, buffer, algo, reward_scale)
+            raw_reward = acting_reward(data, keys)
+            stats = _update(data, gae, loss_module, optim, buffer, algo, reward_scale, keys)
             collector.update_policy_weights_()
             bar.update(data.numel())
             logger.log(
@@ -271,9 +287,10 @@ def _update(
     buffer: TensorDictReplayBuffer,
     algo: DictConfig,
     reward_scale: float,
+    keys: TrainKeys,
 ) -> dict[str, float]:
-    """One PPO update on a collected batch: GAE, then epochs of minibatches."""
-    data["next", "reward"] = data["next", "reward"] * reward_scale
+    """One PPO update on a collected batch ``[..., T]``: GAE, then epochs of minibatches."""
+    data["next", keys.reward] = data["next", keys.reward] * reward_scale
     with torch.no_grad():
         gae(data)
     buffer.extend(data.reshape(-1))

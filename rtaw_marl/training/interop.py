@@ -1,0 +1,95 @@
+"""The interop route: training through TorchRL's ``PettingZooWrapper`` on the AEC env.
+
+This is how other MARL libraries plug the env in. All robots form one group
+(``MarlGroupMapType.ALL_IN_ONE_GROUP``), observations arrive under
+``("agents", "observation", ...)``, ``("agents", "mask")`` marks the acting robot of each
+step, and the loss counts only that row (``loss_mask_key``). The wrapper calls
+``observe()`` for every robot every step, so it is meant for small ``M``; the batched
+native env is the fast route.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from tensordict import TensorDictBase
+from tensordict.utils import NestedKey
+from torchrl.envs import PettingZooWrapper
+from torchrl.envs.libs.pettingzoo import MarlGroupMapType
+
+from rtaw_marl.env.warehouse import env as warehouse_env
+
+__all__ = ["BATCHED_KEYS", "INTEROP_KEYS", "TrainKeys", "acting_reward", "make_interop_env"]
+
+
+@dataclass(frozen=True)
+class TrainKeys:
+    """Every tensordict key the trainer reads or writes, spelled out."""
+
+    observation: tuple[NestedKey, NestedKey, NestedKey, NestedKey]
+    action: NestedKey
+    log_prob: NestedKey
+    value: NestedKey
+    reward: NestedKey
+    done: NestedKey
+    terminated: NestedKey
+    advantage: NestedKey
+    value_target: NestedKey
+    loss_mask: NestedKey | None
+
+
+BATCHED_KEYS = TrainKeys(
+    observation=("robots", "tasks", "agent", "action_mask"),
+    action="action",
+    log_prob="action_log_prob",
+    value="state_value",
+    reward="reward",
+    done="done",
+    terminated="terminated",
+    advantage="advantage",
+    value_target="value_target",
+    loss_mask=None,
+)
+
+INTEROP_KEYS = TrainKeys(
+    observation=(
+        ("agents", "observation", "robots"),
+        ("agents", "observation", "tasks"),
+        ("agents", "observation", "agent"),
+        ("agents", "action_mask"),
+    ),
+    action=("agents", "action"),
+    log_prob=("agents", "action_log_prob"),
+    value=("agents", "state_value"),
+    reward=("agents", "reward"),
+    done=("agents", "done"),
+    terminated=("agents", "terminated"),
+    advantage=("agents", "advantage"),
+    value_target=("agents", "value_target"),
+    loss_mask=("agents", "mask"),
+)
+
+
+def make_interop_env(spec: dict[str, Any], seed: int) -> PettingZooWrapper:
+    """The AEC warehouse env in a ``PettingZooWrapper``, all robots in one group.
+
+    Args:
+        spec: ``{"env": {...}, "layout": ..., "navigator": ..., "tasks": ...}``.
+        seed: Seed of the first reset.
+    """
+    aec = warehouse_env(
+        **spec["env"], layout=spec["layout"], navigator=spec["navigator"], tasks=spec["tasks"]
+    )
+    return PettingZooWrapper(
+        aec, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=seed
+    )
+
+
+def acting_reward(data: TensorDictBase, keys: TrainKeys) -> float:
+    """Mean reward per decision of a collected batch (raw units: minus seconds)."""
+    reward = data["next", keys.reward]
+    if keys.loss_mask is None:
+        return reward.mean().item()
+    mask = data[keys.loss_mask]
+    return reward.squeeze(-1)[mask].mean().item()
