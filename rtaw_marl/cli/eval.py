@@ -5,6 +5,7 @@ Examples::
     rtaw-eval scenario=poc policy=[mpdm,rbts]
     rtaw-eval env.num_robots=100 env.num_tasks=500 navigator=astar layout=open seeds=[0,1,2]
     rtaw-eval --multirun env.num_robots=10,100 navigator=direct,astar
+    rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=[runs/a/best.pt,runs/b/best.pt]
 """
 
 from __future__ import annotations
@@ -18,7 +19,9 @@ from rtaw_marl.cli import CONF_DIR
 from rtaw_marl.cli.common import exit_on_user_error, sim_from_cfg
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
+from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
+from rtaw_marl.sim.core import WarehouseSim
 
 
 @exit_on_user_error
@@ -31,9 +34,7 @@ def run(cfg: DictConfig) -> dict:
     if not seeds or not all(isinstance(s, int) for s in seeds):
         raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
     sim = sim_from_cfg(cfg)
-    policies = {
-        name: make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale) for name in names
-    }
+    policies = _policies(cfg, names, sim)
     total = len(policies) * len(seeds) * sim.config.num_tasks
     with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:
         results = evaluate(sim, policies, seeds, on_decisions=bar.update)
@@ -48,6 +49,36 @@ def run(cfg: DictConfig) -> dict:
     path = write_json_atomic(output, payload)
     print(f"results: {path}")
     return payload
+
+
+def _policies(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
+    """Baselines by name; ``checkpoint`` expands to one greedy policy per checkpoint path."""
+    checkpoints = cfg.checkpoint
+    paths = (
+        []
+        if checkpoints is None
+        else [checkpoints]
+        if isinstance(checkpoints, str)
+        else list(checkpoints)
+    )
+    if "checkpoint" in names and not paths:
+        raise ConfigError("policy=checkpoint needs checkpoint=PATH (or a list of paths)")
+    if paths and "checkpoint" not in names:
+        raise ConfigError("checkpoint=... given but policy does not include 'checkpoint'")
+    policies: dict[str, SimPolicy] = {}
+    for name in names:
+        if name == "checkpoint":
+            import torch
+
+            from rtaw_marl.policies.checkpoint import load_policy
+
+            torch.set_num_threads(int(cfg.torch_threads))
+            for path in paths:
+                policy = load_policy(path)
+                policies[policy.name] = policy
+        else:
+            policies[name] = make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale)
+    return policies
 
 
 @hydra.main(config_path=str(CONF_DIR), config_name="eval", version_base="1.3")

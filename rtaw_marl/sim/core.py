@@ -361,6 +361,7 @@ class WarehouseSim:
         if self.decisions >= self._num_decisions:
             self.done = True
             self.truncated = self._paper
+            self._dist = None  # the acting robot has moved: its cached distances are stale
         else:
             self._select_next_robot()
 

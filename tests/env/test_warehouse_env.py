@@ -456,19 +456,6 @@ def test_unseeded_reset_after_seeded_reset_is_reproducible() -> None:
         assert [r for _, _, r, *_ in next_a] != [r for _, _, r, *_ in seeded_a]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "stale k in the last actor's final observation: rtaw_marl/sim/core.py "
-        "WarehouseSim.step sets done on the last decision without calling "
-        "_select_next_robot(), the only place that clears the per-decision cache _dist "
-        "(distances from the actor's cell BEFORE its move); robot_distances(robot) returns "
-        "that cache whenever robot == sim.robot, and raw_env.observe "
-        "(rtaw_marl/env/warehouse.py, the 'else' branch taken once sim.done) calls it for "
-        "the last actor. In paper mode (queue still full) its k column is wrong while "
-        "every other agent's is fresh."
-    ),
-)
 def test_final_observation_k_is_from_current_cell_paper_mode() -> None:
     env = warehouse_v0.env(
         num_robots=2,
