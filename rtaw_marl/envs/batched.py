@@ -114,6 +114,7 @@ class BatchedWarehouseEnv(EnvBase):
             shape=(b,),
         )
         self.action_spec = Categorical(n, shape=(b,), dtype=torch.int64)
+        self._action_spec_unbatched = self.full_action_spec["action"]
         self.reward_spec = Unbounded(shape=(b, 1), dtype=torch.float32)
         self.done_spec = Composite(
             done=Categorical(2, shape=(b, 1), dtype=torch.bool),
@@ -198,12 +199,15 @@ class BatchedWarehouseEnv(EnvBase):
         robots = robot_features(self._robot_xy, self._free_at, self._time, self.scale)
         tasks = task_features(self._rows, self._length, self._dist, self._mask, self.scale)
         agent = robots[np.arange(self.num_envs), self._robot]
+        mask = torch.from_numpy(self._mask.copy())
+        # A masked action spec makes random policies (and check_env_specs) pick valid slots.
+        self._action_spec_unbatched.update_mask(mask)
         return TensorDict(
             {
                 "robots": torch.from_numpy(robots),
                 "tasks": torch.from_numpy(tasks),
                 "agent": torch.from_numpy(agent),
-                "action_mask": torch.from_numpy(self._mask.copy()),
+                "action_mask": mask,
             },
             batch_size=self.batch_size,
         )
