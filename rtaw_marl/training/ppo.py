@@ -110,6 +110,11 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
     _check(cfg)
     run_dir = Path(run_dir)
     ckpt_dir = run_dir / "checkpoints"
+    if (ckpt_dir / "last.pt").exists() and not cfg.resume:
+        raise ConfigError(
+            f"{run_dir} already holds a training run; pass resume={ckpt_dir / 'last.pt'} "
+            "to continue it, or choose another output_dir"
+        )
     algo = cfg.algo
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(int(cfg.torch_threads))

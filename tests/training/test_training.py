@@ -1,0 +1,203 @@
+"""rtaw-train mechanics: resume, determinism, interop route, workers, checkpoints, CLI."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+from rtaw_marl.envs import BatchedWarehouseEnv
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.training.checkpoint import (
+    FEATURES,
+    build_networks,
+    load_checkpoint,
+    save_checkpoint,
+)
+from rtaw_marl.training.ppo import greedy_ttd, train
+
+TINY = ["scenario=poc", "frames=1024", "eval.every_frames=512", "collector.envs_per_worker=4"]
+
+
+def _actor_state(path: Path) -> dict[str, torch.Tensor]:
+    return load_checkpoint(path)["model"]["actor"]
+
+
+def test_resume_continues_frames_and_reloads_parameters(train_cfg, tmp_path: Path) -> None:
+    first = train(train_cfg(TINY), tmp_path / "a")
+    ckpt = load_checkpoint(first.last_checkpoint)
+    assert ckpt["frames"] == 1024
+    # Reloaded parameters reproduce the checkpoint's own evaluation exactly.
+    actor, _ = build_networks(ckpt["model_config"])
+    actor.load_state_dict(ckpt["model"]["actor"])
+    env = BatchedWarehouseEnv(**_poc_spec(), num_envs=5, seed=0)
+    ttd = sum(greedy_ttd(actor, env, list(ckpt["config"]["eval"]["seeds"]))) / 5
+    assert ttd == pytest.approx(ckpt["eval"]["ttd"])
+
+    resumed = train(
+        train_cfg(
+            [
+                *TINY[:1],
+                "frames=2048",
+                "eval.every_frames=512",
+                "collector.envs_per_worker=4",
+                f"resume={first.last_checkpoint}",
+            ]
+        ),
+        tmp_path / "b",
+    )
+    after = load_checkpoint(resumed.last_checkpoint)
+    assert after["frames"] == 2048
+    assert after["iteration"] == ckpt["iteration"] + 2
+    assert [row["frames"] for row in resumed.history] == [1536, 2048]
+    assert after["optimizer"]["state"][0]["step"] > ckpt["optimizer"]["state"][0]["step"]
+
+
+def _poc_spec() -> dict:
+    return {
+        "env": {
+            "num_robots": 2,
+            "num_tasks": 5,
+            "queue_len": 2,
+            "noise_mean": 0.0,
+            "noise_var": 0.0,
+            "robot_starts": [[2, 2], [6, 2]],
+            "robot_free_times": [0.0, 2.0],
+        },
+        "layout": {"name": "open", "width": 10, "height": 10, "path": None},
+        "navigator": "direct",
+        "tasks": "poc",
+    }
+
+
+def test_same_seed_same_training_run(train_cfg, tmp_path: Path) -> None:
+    a = train(train_cfg(TINY), tmp_path / "a")
+    b = train(train_cfg(TINY), tmp_path / "b")
+    sa, sb = _actor_state(a.last_checkpoint), _actor_state(b.last_checkpoint)
+    assert all(torch.equal(sa[k], sb[k]) for k in sa)
+    c = train(train_cfg([*TINY, "seed=1"]), tmp_path / "c")
+    sc = _actor_state(c.last_checkpoint)
+    assert not all(torch.equal(sa[k], sc[k]) for k in sa)
+
+
+def test_refuses_to_overwrite_a_run(train_cfg, tmp_path: Path) -> None:
+    train(train_cfg(TINY), tmp_path)
+    with pytest.raises(ConfigError, match="already holds a training run"):
+        train(train_cfg(TINY), tmp_path)
+
+
+def test_interop_route_trains_through_pettingzoo_wrapper(train_cfg, tmp_path: Path) -> None:
+    """A few PPO updates through torchrl's PettingZooWrapper with loss_mask_key."""
+    result = train(
+        train_cfg(["scenario=poc", "frames=1024", "eval.every_frames=512", "interop=true"]),
+        tmp_path,
+    )
+    torch.manual_seed(0)  # train() seeds torch with cfg.seed=0 before building the networks
+    init, _ = build_networks({"embed_dim": 16, "head_dim": 8, "critic_hidden": 32})
+    trained = _actor_state(result.last_checkpoint)
+    assert load_checkpoint(result.last_checkpoint)["frames"] == 1024
+    assert any(not torch.equal(init.state_dict()[k], trained[k]) for k in trained)
+    assert all(torch.isfinite(v).all() for v in trained.values())
+
+
+def test_two_worker_collector(train_cfg, tmp_path: Path) -> None:
+    result = train(
+        train_cfg(
+            [
+                "scenario=poc",
+                "frames=1024",
+                "eval.every_frames=1024",
+                "collector.workers=2",
+                "collector.envs_per_worker=4",
+            ]
+        ),
+        tmp_path,
+    )
+    assert result.frames == 1024
+
+
+def test_training_outputs(train_cfg, tmp_path: Path) -> None:
+    result = train(train_cfg(TINY), tmp_path)
+    assert (tmp_path / "training_curve.png").stat().st_size > 1000
+    assert (tmp_path / "logs" / "train" / "scalars" / "eval" / "ttd.csv").is_file()
+    ckpt = load_checkpoint(result.best_checkpoint)
+    assert set(ckpt) >= {"model", "optimizer", "config", "versions", "frames", "command"}
+    assert ckpt["versions"]["torchrl"] == "0.14.1"
+    assert not list((tmp_path / "checkpoints").glob(".*tmp"))
+
+
+def test_checkpoint_for_other_features_fails_clearly(tmp_path: Path) -> None:
+    actor, critic = build_networks({})
+    path = save_checkpoint(
+        tmp_path / "x.pt",
+        {"model": {"actor": actor.state_dict(), "critic": critic.state_dict()}, "model_config": {}},
+    )
+    ckpt = torch.load(path, weights_only=False)
+    ckpt["features"] = {"robots": ["x", "y"], "tasks": FEATURES["tasks"]}
+    torch.save(ckpt, path)
+    with pytest.raises(ConfigError, match="trained on observation features"):
+        load_checkpoint(path)
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("algo.minibatch_size=100", "must be a multiple of algo.minibatch_size"),
+        ("collector.envs_per_worker=7", "must be a multiple of"),
+        ("logger=wandb", "logger must be one of"),
+        ("resume=missing.pt", "checkpoint not found"),
+        ("+model.embed_dmi=8", "unknown model keys"),
+    ],
+)
+def test_train_cli_errors(override: str, message: str, tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [
+            str(Path(sys.executable).with_name("rtaw-train")),
+            "scenario=poc",
+            "frames=1024",
+            f"output_dir={tmp_path}",
+            "progress=false",
+            override,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 2
+    assert message in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_train_then_eval_cli_on_other_sizes(tmp_path: Path) -> None:
+    """rtaw-train smoke run, then rtaw-eval runs its checkpoint with other M, N, navigator."""
+    bin_dir = Path(sys.executable).parent
+    run = subprocess.run(
+        [str(bin_dir / "rtaw-train"), *TINY, f"output_dir={tmp_path / 'run'}", "progress=false"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 0, run.stderr
+    ckpt = tmp_path / "run" / "checkpoints" / "best.pt"
+    ev = subprocess.run(
+        [
+            str(bin_dir / "rtaw-eval"),
+            "policy=[mpdm,checkpoint]",
+            f"checkpoint={ckpt}",
+            "env.num_robots=20",
+            "env.queue_len=5",
+            "env.num_tasks=50",
+            "navigator=direct",
+            "seeds=[0]",
+            f"output={tmp_path / 'r.json'}",
+            "progress=false",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert ev.returncode == 0, ev.stderr
+    assert f"rtaw:{ckpt}" in ev.stdout
