@@ -1,0 +1,188 @@
+"""Benchmark of the training stack: collection speed, policy latency, time to beat MPDM.
+
+Usage::
+
+    python experiments/bench_train.py              # collection + latency (about 2 minutes)
+    python experiments/bench_train.py --train      # + wall time for rtaw-train to beat MPDM
+    python experiments/bench_train.py --quick      # tiny sizes, a smoke run
+
+Prints markdown tables; ``--output PATH`` also writes them to a file. Medians of
+``--repeats`` measurements taken in one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import torch
+from hydra import compose, initialize_config_dir
+from torchrl.collectors import Collector, MultiSyncCollector
+
+from rtaw_marl.cli import CONF_DIR
+from rtaw_marl.envs import BatchedWarehouseEnv
+from rtaw_marl.models import RTAWActor, make_actor
+
+MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
+
+
+def _layout() -> dict:
+    usc = MAPS / "rtaw" / "usc_64.cfg"
+    if usc.is_file():
+        return {"name": "file", "path": str(usc)}
+    return {"name": "open", "width": 64, "height": 64}
+
+
+def _make_env(m: int, envs: int, seed: int, layout: dict) -> BatchedWarehouseEnv:
+    return BatchedWarehouseEnv(
+        {"num_robots": m, "num_tasks": 500, "queue_len": 10},
+        layout,
+        "astar",
+        "designated",
+        num_envs=envs,
+        seed=seed,
+    )
+
+
+def bench_collection(
+    m: int, workers: int, envs: int, batch: int, batches: int, repeats: int
+) -> list[float]:
+    """Collected frames per second (policy sampling included), one value per repeat."""
+    layout = _layout()
+    actor = make_actor(RTAWActor())
+    rates = []
+    for rep in range(repeats):
+        kwargs = {
+            "frames_per_batch": batch,
+            "total_frames": batch * (batches + 1),
+            "auto_register_policy_transforms": False,
+        }
+        if workers == 1:
+            collector = Collector(lambda: _make_env(m, envs, rep, layout), actor, **kwargs)
+        else:
+            fns = [(lambda w=w: _make_env(m, envs, 100 * rep + w, layout)) for w in range(workers)]
+            collector = MultiSyncCollector(fns, actor, **kwargs)
+        it = iter(collector)
+        next(it)  # warm-up: process start, JIT load, first distance fields
+        start = time.perf_counter()
+        frames = sum(next(it).numel() for _ in range(batches))
+        rates.append(frames / (time.perf_counter() - start))
+        collector.shutdown()
+    return rates
+
+
+@torch.no_grad()
+def bench_latency(m: int, n: int, calls: int) -> float:
+    """Median seconds of one policy forward (batch of one decision)."""
+    net = RTAWActor().eval()
+    robots, tasks = torch.rand(1, m, 3), torch.rand(1, n, 6)
+    agent, mask = torch.rand(1, 3), torch.ones(1, n, dtype=torch.bool)
+    for _ in range(20):
+        net(robots, tasks, agent, mask)
+    times = []
+    for _ in range(calls):
+        start = time.perf_counter()
+        net(robots, tasks, agent, mask)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def bench_time_to_beat_mpdm(frames: int, every: int) -> tuple[list[dict], float]:
+    """Train on the default scenario; evaluation history and MPDM's TTD."""
+    from rtaw_marl.training.ppo import train
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose(
+            config_name="train",
+            overrides=[f"frames={frames}", f"eval.every_frames={every}", "progress=false"],
+        )
+    with tempfile.TemporaryDirectory() as tmp:
+        result = train(cfg, tmp)
+    return result.history, result.mpdm_ttd
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="tiny sizes (smoke run)")
+    parser.add_argument("--train", action="store_true", help="also time training to beat MPDM")
+    parser.add_argument("--train-frames", type=int, default=204800)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--output", type=Path, default=None)
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    lines = [
+        f"machine: {platform.platform()}, {torch.get_num_threads()} torch thread, "
+        f"python {platform.python_version()}, torch {torch.__version__}",
+        "",
+        "| M | workers | envs/worker | frames/s (median) | spread | target |",
+        "|---:|---:|---:|---:|---|---|",
+    ]
+    sizes = [10] if args.quick else [10, 100, 1000]
+    repeats = 1 if args.quick else args.repeats
+    for m in sizes:
+        for workers in (1, 2):
+            envs = 64 if m <= 100 else 32
+            batch, batches = (256, 1) if args.quick else (4096 if m <= 100 else 2048, 4)
+            if args.quick:
+                envs = 16
+            rates = bench_collection(m, workers, envs, batch, batches, repeats)
+            target = ">= 20,000" if m == 100 else ""
+            lines.append(
+                f"| {m} | {workers} | {envs} | {statistics.median(rates):,.0f} | "
+                f"{min(rates):,.0f}-{max(rates):,.0f} | {target} |"
+            )
+            print(lines[-1], flush=True)
+    lines += ["", "| M | N | forward latency (ms, median) |", "|---:|---:|---:|"]
+    calls = 50 if args.quick else 500
+    grid = (
+        [(10, 10), (1000, 10)]
+        if args.quick
+        else [(10, 10), (100, 10), (1000, 10), (10000, 10), (100, 2), (100, 50), (100, 100)]
+    )
+    lat = {}
+    for m, n in grid:
+        lat[(m, n)] = bench_latency(m, n, calls)
+        lines.append(f"| {m} | {n} | {1e3 * lat[(m, n)]:.3f} |")
+        print(lines[-1], flush=True)
+    ms = [m for m, n in grid if n == 10]
+    if len(ms) > 2:
+        slope, intercept = np.polyfit(ms, [lat[(m, 10)] * 1e3 for m in ms], 1)
+        lines.append(
+            f"\nlinear fit over M (N=10): {intercept:.3f} ms + {slope * 1e3:.3f} ms per 1000 robots"
+        )
+    if args.train:
+        history, mpdm = bench_time_to_beat_mpdm(args.train_frames, 10240)
+        lines += [
+            "",
+            f"MPDM TTD on the evaluation seeds: {mpdm:.1f}",
+            "",
+            "| frames | wall s | RTAW TTD | vs MPDM |",
+            "|---:|---:|---:|---:|",
+        ]
+        for row in history:
+            lines.append(
+                f"| {row['frames']} | {row['wall_s']:.0f} | {row['ttd']:.1f} | "
+                f"{row['improvement_pct']:+.1f}% |"
+            )
+        first = next((r for r in history if r["ttd"] < mpdm), None)
+        lines.append(
+            f"\nfirst evaluation below MPDM: {first['wall_s']:.0f} s ({first['frames']} frames)"
+            if first
+            else "\nnever below MPDM in this run"
+        )
+    text = "\n".join(lines)
+    print(text)
+    if args.output:
+        args.output.write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
