@@ -18,6 +18,7 @@ import statistics
 import sys
 import tempfile
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -63,10 +64,10 @@ def bench_collection(
             "total_frames": batch * (batches + 1),
             "auto_register_policy_transforms": False,
         }
+        fns = [partial(_make_env, m, envs, 100 * rep + w, layout) for w in range(workers)]
         if workers == 1:
-            collector = Collector(lambda: _make_env(m, envs, rep, layout), actor, **kwargs)
+            collector = Collector(fns[0], actor, **kwargs)
         else:
-            fns = [(lambda w=w: _make_env(m, envs, 100 * rep + w, layout)) for w in range(workers)]
             collector = MultiSyncCollector(fns, actor, **kwargs)
         it = iter(collector)
         next(it)  # warm-up: process start, JIT load, first distance fields
