@@ -13,8 +13,14 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e ".[dev]"
 	touch $(STAMP)
 
+DEMO_RUN := runs/demo
+
+# Train RTAW briefly on the default scenario, then compare it with MPDM and RBTS.
 demo: $(STAMP)
-	$(BIN)/rtaw-eval scenario=default policy=[mpdm,rbts,random] seeds=[0,1,2]
+	rm -rf $(DEMO_RUN)
+	$(BIN)/rtaw-train frames=40960 eval.every_frames=10240 output_dir=$(DEMO_RUN)
+	$(BIN)/rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
+		seeds=[0,1,2,3,4] output=$(DEMO_RUN)/results.json
 
 test: $(STAMP)
 	$(BIN)/ruff check rtaw_marl tests experiments

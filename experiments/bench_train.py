@@ -94,14 +94,19 @@ def bench_latency(m: int, n: int, calls: int) -> float:
     return statistics.median(times)
 
 
-def bench_time_to_beat_mpdm(frames: int, every: int) -> tuple[list[dict], float]:
+def bench_time_to_beat_mpdm(frames: int, every: int, algo: str) -> tuple[list[dict], float]:
     """Train on the default scenario; evaluation history and MPDM's TTD."""
     from rtaw_marl.training.ppo import train
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         cfg = compose(
             config_name="train",
-            overrides=[f"frames={frames}", f"eval.every_frames={every}", "progress=false"],
+            overrides=[
+                f"frames={frames}",
+                f"eval.every_frames={every}",
+                f"algo={algo}",
+                "progress=false",
+            ],
         )
     with tempfile.TemporaryDirectory() as tmp:
         result = train(cfg, tmp)
@@ -113,6 +118,7 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="tiny sizes (smoke run)")
     parser.add_argument("--train", action="store_true", help="also time training to beat MPDM")
     parser.add_argument("--train-frames", type=int, default=204800)
+    parser.add_argument("--algo", default="ppo_fast", help="algo config for --train")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--output", type=Path, default=None)
     args = parser.parse_args()

@@ -142,3 +142,18 @@ def test_cli_multirun_writes_one_result_per_job(tmp_path: Path) -> None:
     assert len(results) == 2
     ttds = {json.loads(p.read_text())["config"]["navigator"]["name"]: p for p in results}
     assert set(ttds) == {"direct", "astar"}
+
+
+@pytest.mark.parametrize(
+    ("group", "option"), [(g, o) for g in ("model", "algo") for o in _options(g)]
+)
+def test_every_training_option_composes(group: str, option: str) -> None:
+    """Each model/algo option composes into the rtaw-train config and builds networks."""
+    from rtaw_marl.training.checkpoint import build_networks
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose(config_name="train", overrides=[f"{group}={option}"])
+    actor, critic = build_networks(dict(cfg.model))
+    assert sum(p.numel() for p in actor.parameters()) > 0
+    assert cfg.algo.frames_per_batch % cfg.algo.minibatch_size == 0
+    assert 0 < cfg.algo.policy_coeff <= 1
