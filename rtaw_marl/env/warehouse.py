@@ -91,6 +91,7 @@ from rtaw_marl.env.render import render_ansi
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
 from rtaw_marl.sim.features import robot_features, task_features
 from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.sim.tasks import TaskStream
 
@@ -167,7 +168,7 @@ class raw_env(AECEnv):
         self._zero_mask = np.zeros(n, dtype=np.int8)
 
     @property
-    def navigator(self):
+    def navigator(self) -> Navigator:
         """The simulator's navigator (RBTS uses it to measure other robots' distances)."""
         return self.sim.navigator
 

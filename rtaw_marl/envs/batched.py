@@ -134,15 +134,7 @@ class BatchedWarehouseEnv(EnvBase):
             which = np.flatnonzero(tensordict["_reset"].reshape(self.num_envs).numpy())
         else:
             which = range(self.num_envs)
-        for i in which:
-            seed = int(self._seed_rngs[i].integers(2**62))
-            self.episode_seeds[i] = seed
-            self.sims[i].reset(seed)
-            self._sync(i)
-        out = self._observation()
-        zeros = torch.zeros((self.num_envs, 1), dtype=torch.bool)
-        out.update({"done": zeros, "terminated": zeros.clone(), "truncated": zeros.clone()})
-        return out
+        return self._reset_sims({int(i): int(self._seed_rngs[i].integers(2**62)) for i in which})
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         actions = tensordict["action"].reshape(self.num_envs).tolist()
@@ -179,7 +171,11 @@ class BatchedWarehouseEnv(EnvBase):
         seeds = [int(s) for s in seeds]
         if len(seeds) != self.num_envs:
             raise ConfigError(f"reset_to needs {self.num_envs} seeds, got {len(seeds)}")
-        for i, seed in enumerate(seeds):
+        return self._reset_sims(dict(enumerate(seeds)))
+
+    def _reset_sims(self, seeds: dict[int, int]) -> TensorDictBase:
+        """Reset simulator ``i`` with ``seeds[i]`` for each key; observe the whole batch."""
+        for i, seed in seeds.items():
             self.episode_seeds[i] = seed
             self.sims[i].reset(seed)
             self._sync(i)

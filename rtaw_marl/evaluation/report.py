@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = ["format_table", "improvement", "write_json_atomic"]
 
@@ -58,20 +58,6 @@ def format_table(
 
 
 def write_json_atomic(path: str | Path, payload: Any) -> Path:
-    """Write ``payload`` as JSON through a temporary file and a rename.
-
-    A crash at any moment leaves either the previous file or the complete new one.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(payload, fh, indent=2)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    """Write ``payload`` as indented JSON, atomically (temporary file + rename)."""
+    data = json.dumps(payload, indent=2).encode()
+    return atomic_write(path, lambda fh: fh.write(data))

@@ -405,22 +405,14 @@ class WarehouseSim:
     # ------------------------------------------------------------------ results
     def metrics(self) -> EpisodeMetrics:
         """Metrics of the episode so far (final once :attr:`done`)."""
-        served = self.task_robot >= 0
-        result, _ = compute_metrics(
-            served,
-            self.task_ttd,
-            self.task_length,
-            self.task_arrival,
-            self.task_assigned,
-            self.task_finished,
-            self.robot_busy,
-            self.decisions,
-        )
-        return result
+        return self._compute_metrics()[0]
 
     def robot_idle(self) -> np.ndarray:
         """Per-robot idle time ``float64 [M]`` within ``[0, makespan]``."""
-        _, idle = compute_metrics(
+        return self._compute_metrics()[1]
+
+    def _compute_metrics(self) -> tuple[EpisodeMetrics, np.ndarray]:
+        return compute_metrics(
             self.task_robot >= 0,
             self.task_ttd,
             self.task_length,
@@ -430,4 +422,3 @@ class WarehouseSim:
             self.robot_busy,
             self.decisions,
         )
-        return idle

@@ -17,10 +17,8 @@ target, so a kill at any moment leaves the previous or the new checkpoint, both 
 
 from __future__ import annotations
 
-import os
 import platform
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +31,7 @@ import rtaw_marl
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
 from rtaw_marl.sim.features import ROBOT_FEATURES, TASK_FEATURES
+from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = [
     "FORMAT",
@@ -60,8 +59,6 @@ def library_versions() -> dict[str, str]:
 
 def save_checkpoint(path: str | Path, payload: dict[str, Any]) -> Path:
     """Atomically write ``payload`` (plus format, features and versions) to ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     full = {
         "format": FORMAT,
         "features": FEATURES,
@@ -69,17 +66,7 @@ def save_checkpoint(path: str | Path, payload: dict[str, Any]) -> Path:
         "command": sys.argv,
         **payload,
     }
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            torch.save(full, fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write(path, lambda fh: torch.save(full, fh))
 
 
 def load_checkpoint(path: str | Path) -> dict[str, Any]:

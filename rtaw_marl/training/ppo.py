@@ -137,27 +137,19 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
         loss_critic_type="smooth_l1",
         normalize_advantage=algo.normalize_advantage,
     )
-    loss_module.set_keys(
-        action=keys.action,
-        sample_log_prob=keys.log_prob,
-        value=keys.value,
-        reward=keys.reward,
-        done=keys.done,
-        terminated=keys.terminated,
-        advantage=keys.advantage,
-        value_target=keys.value_target,
-    )
+    shared_keys = {
+        "value": keys.value,
+        "reward": keys.reward,
+        "done": keys.done,
+        "terminated": keys.terminated,
+        "advantage": keys.advantage,
+        "value_target": keys.value_target,
+    }
+    loss_module.set_keys(action=keys.action, sample_log_prob=keys.log_prob, **shared_keys)
     # Interop route: only the acting robot's row of each step counts in the loss.
     loss_module.loss_mask_key = keys.loss_mask
     gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic)
-    gae.set_keys(
-        value=keys.value,
-        reward=keys.reward,
-        done=keys.done,
-        terminated=keys.terminated,
-        advantage=keys.advantage,
-        value_target=keys.value_target,
-    )
+    gae.set_keys(**shared_keys)
     optim = torch.optim.Adam(loss_module.parameters(), lr=algo.lr)
 
     frames_done, iteration, best_ttd = 0, 0, float("inf")

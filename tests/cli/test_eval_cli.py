@@ -153,7 +153,7 @@ def test_every_training_option_composes(group: str, option: str) -> None:
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         cfg = compose(config_name="train", overrides=[f"{group}={option}"])
-    actor, critic = build_networks(dict(cfg.model))
+    actor, _ = build_networks(dict(cfg.model))
     assert sum(p.numel() for p in actor.parameters()) > 0
     assert cfg.algo.frames_per_batch % cfg.algo.minibatch_size == 0
     assert 0 < cfg.algo.policy_coeff <= 1

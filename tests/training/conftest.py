@@ -8,6 +8,18 @@ from omegaconf import DictConfig
 
 from rtaw_marl.cli import CONF_DIR
 
+#: The paper's proof-of-concept simulator settings (appendix).
+POC_ENV = {
+    "num_robots": 2,
+    "num_tasks": 5,
+    "queue_len": 2,
+    "noise_mean": 0.0,
+    "noise_var": 0.0,
+    "robot_starts": [[2, 2], [6, 2]],
+    "robot_free_times": [0.0, 2.0],
+}
+POC_LAYOUT = {"name": "open", "width": 10, "height": 10}
+
 
 def compose_train(overrides: list[str]) -> DictConfig:
     """The rtaw-train config with ``overrides`` (progress bar off)."""

@@ -14,23 +14,14 @@ from rtaw_marl.policies.checkpoint import load_policy
 from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.training.checkpoint import build_networks, load_checkpoint
 from rtaw_marl.training.ppo import train
+from tests.training.conftest import POC_ENV, POC_LAYOUT
 
 pytestmark = pytest.mark.slow
-
-POC_ENV = {
-    "num_robots": 2,
-    "num_tasks": 5,
-    "queue_len": 2,
-    "noise_mean": 0.0,
-    "noise_var": 0.0,
-    "robot_starts": [[2, 2], [6, 2]],
-    "robot_free_times": [0.0, 2.0],
-}
 
 
 def _poc_optimum() -> float:
     """Exhaustive search over every action sequence of the proof of concept."""
-    sim = build_sim(POC_ENV, {"name": "open", "width": 10, "height": 10}, "direct", "poc")
+    sim = build_sim(POC_ENV, POC_LAYOUT, "direct", "poc")
     best = np.inf
     for actions in itertools.product(range(2), repeat=5):
         sim.reset(0)
@@ -54,7 +45,7 @@ def test_poc_reaches_the_exhaustive_optimum(train_cfg, tmp_path: Path) -> None:
     assert result.best_ttd == pytest.approx(optimum, abs=1e-3)
     assert result.mpdm_ttd == pytest.approx(22.737, abs=1e-3)
     # The best checkpoint reproduces it through the evaluation path.
-    sim = build_sim(POC_ENV, {"name": "open", "width": 10, "height": 10}, "direct", "poc")
+    sim = build_sim(POC_ENV, POC_LAYOUT, "direct", "poc")
     policy = load_policy(result.best_checkpoint)
     sim.reset(0)
     total = 0.0

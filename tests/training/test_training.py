@@ -18,6 +18,7 @@ from rtaw_marl.training.checkpoint import (
     save_checkpoint,
 )
 from rtaw_marl.training.ppo import greedy_ttd, train
+from tests.training.conftest import POC_ENV, POC_LAYOUT
 
 TINY = ["scenario=poc", "frames=1024", "eval.every_frames=512", "collector.envs_per_worker=4"]
 
@@ -57,20 +58,7 @@ def test_resume_continues_frames_and_reloads_parameters(train_cfg, tmp_path: Pat
 
 
 def _poc_spec() -> dict:
-    return {
-        "env": {
-            "num_robots": 2,
-            "num_tasks": 5,
-            "queue_len": 2,
-            "noise_mean": 0.0,
-            "noise_var": 0.0,
-            "robot_starts": [[2, 2], [6, 2]],
-            "robot_free_times": [0.0, 2.0],
-        },
-        "layout": {"name": "open", "width": 10, "height": 10, "path": None},
-        "navigator": "direct",
-        "tasks": "poc",
-    }
+    return {"env": POC_ENV, "layout": POC_LAYOUT, "navigator": "direct", "tasks": "poc"}
 
 
 def test_same_seed_same_training_run(train_cfg, tmp_path: Path) -> None:
