@@ -206,6 +206,7 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
     reward_scale = float(algo.reward_scale) if algo.reward_scale else 1.0 / eval_env.scale
     next_eval = frames_done + int(cfg.eval.every_frames)
     bar = tqdm(total=int(cfg.frames), initial=frames_done, unit="fr", disable=not cfg.progress)
+    postfix: dict[str, str] = {}  # mean reward per decision, latest eval TTD, MPDM's TTD
     start = time.perf_counter()
 
     def checkpoint(eval_row: dict[str, float]) -> None:
@@ -236,7 +237,8 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
         }
         history.append(row)
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, frames_done)
-        bar.set_postfix(eval_ttd=f"{ttd:.0f}", mpdm=f"{mpdm_ttd:.0f}")
+        postfix.update(eval_ttd=f"{ttd:.0f}", mpdm_ttd=f"{mpdm_ttd:.0f}")
+        bar.set_postfix(postfix)
         return row
 
     try:
@@ -253,6 +255,8 @@ def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
             raw_reward = acting_reward(data, keys)
             stats = _update(data, gae, loss_module, optim, buffer, algo, reward_scale, keys)
             collector.update_policy_weights_()
+            postfix["reward"] = f"{raw_reward:.2f}"
+            bar.set_postfix(postfix, refresh=False)
             bar.update(data.numel())
             logger.log(
                 {

@@ -189,3 +189,25 @@ def test_train_then_eval_cli_on_other_sizes(tmp_path: Path) -> None:
     )
     assert ev.returncode == 0, ev.stderr
     assert f"rtaw:{ckpt}" in ev.stdout
+
+
+def test_interrupted_save_keeps_previous_checkpoint(tmp_path: Path, monkeypatch) -> None:
+    """A crash in the middle of writing leaves the previous checkpoint intact and loadable."""
+    actor, critic = build_networks({})
+    payload = {
+        "model": {"actor": actor.state_dict(), "critic": critic.state_dict()},
+        "model_config": {},
+        "frames": 1,
+    }
+    path = save_checkpoint(tmp_path / "last.pt", payload)
+
+    def crash(obj, fh) -> None:
+        fh.write(b"partial")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(torch, "save", crash)
+    with pytest.raises(KeyboardInterrupt):
+        save_checkpoint(path, {**payload, "frames": 2})
+    monkeypatch.undo()
+    assert load_checkpoint(path)["frames"] == 1
+    assert [p.name for p in tmp_path.iterdir()] == ["last.pt"]
