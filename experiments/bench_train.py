@@ -164,10 +164,10 @@ def main() -> int:
             f"\nlinear fit over M (N=10): {intercept:.3f} ms + {slope * 1e3:.3f} ms per 1000 robots"
         )
     if args.train:
-        history, mpdm = bench_time_to_beat_mpdm(args.train_frames, 10240)
+        history, mpdm = bench_time_to_beat_mpdm(args.train_frames, 10240, args.algo)
         lines += [
             "",
-            f"MPDM TTD on the evaluation seeds: {mpdm:.1f}",
+            f"algo={args.algo}; MPDM TTD on the evaluation seeds: {mpdm:.1f}",
             "",
             "| frames | wall s | RTAW TTD | vs MPDM |",
             "|---:|---:|---:|---:|",
