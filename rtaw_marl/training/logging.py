@@ -35,7 +35,8 @@ class RunLogger:
                 self._logger = TensorboardLogger(exp_name="train", log_dir=str(run_dir / "logs"))
             except ImportError as exc:
                 raise ConfigError(
-                    "logger=tensorboard needs the tensorboard package: pip install tensorboard"
+                    "logger=tensorboard needs the tensorboard package: "
+                    "pip install -e '.[tensorboard]'"
                 ) from exc
 
     def log(self, scalars: Mapping[str, float], step: int) -> None:
