@@ -20,6 +20,8 @@ from rtaw_marl.cli.common import exit_on_user_error, sim_from_cfg
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
 from rtaw_marl.evaluation.evaluate import SimPolicy
+from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
+from rtaw_marl.evaluation.report import gap_to_bound
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.core import WarehouseSim
 
@@ -39,11 +41,18 @@ def run(cfg: DictConfig) -> dict:
     with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:
         results = evaluate(sim, policies, seeds, on_decisions=bar.update)
 
-    print(format_table(results))
+    bound = None
+    if cfg.lower_bound and sim.config.episode_mode == "drain":
+        bound = [ttd_lower_bound(sim, seed) for seed in seeds]
+        for metrics in results.values():
+            metrics["gap_pct"] = gap_to_bound(metrics["ttd"], bound)
+
+    print(format_table(results, lower_bound=bound))
     output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json"
     payload = {
         "config": OmegaConf.to_container(cfg, resolve=True),
         "seeds": seeds,
+        "lower_bound": bound,
         "policies": results,
     }
     path = write_json_atomic(output, payload)

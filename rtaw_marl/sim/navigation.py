@@ -215,7 +215,12 @@ class AStarNavigator(Navigator):
     def distance_matrix(self, sources: np.ndarray, targets: np.ndarray) -> np.ndarray:
         sources = np.asarray(sources, dtype=np.int64).reshape(-1, 2)
         targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
-        d = self.fields(targets)[:, self._padded_index(sources)].T.astype(np.float64)
+        src = self._padded_index(sources)
+        d = np.empty((len(sources), len(targets)), dtype=np.float64)
+        # Chunks of targets bound the memory of stacked fields (260 KiB each at 256x256).
+        step = max(1, self._capacity // 2)
+        for start in range(0, len(targets), step):
+            d[:, start : start + step] = self.fields(targets[start : start + step])[:, src].T
         if (d < 0).any():
             i, j = np.argwhere(d < 0)[0]
             self._checked(np.array([-1.0]), sources[i : i + 1], targets[j : j + 1])
