@@ -39,11 +39,14 @@ class Layout:
     Attributes:
         obstacles: Boolean array ``[H, W]``; ``True`` marks a blocked cell.
         name: A short label used in reports and renderings.
+        pickup: Optional boolean ``[H, W]`` mask of pickup stations (station-based tasks).
+        delivery: Optional boolean ``[H, W]`` mask of delivery stations.
     """
 
     obstacles: np.ndarray
     name: str = "grid"
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    pickup: np.ndarray | None = field(default=None, repr=False)
+    delivery: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         grid = np.asarray(self.obstacles, dtype=bool)
@@ -54,6 +57,23 @@ class Layout:
         grid = grid.copy()
         grid.flags.writeable = False
         object.__setattr__(self, "obstacles", grid)
+        for kind in ("pickup", "delivery"):
+            mask = getattr(self, kind)
+            if mask is None:
+                continue
+            mask = np.asarray(mask, dtype=bool).copy()
+            if mask.shape != grid.shape:
+                raise LayoutError(
+                    f"layout {self.name!r}: {kind} mask is {mask.shape}, grid is {grid.shape}"
+                )
+            on_obstacle = np.argwhere(mask & grid)
+            if len(on_obstacle):
+                y, x = on_obstacle[0]
+                raise LayoutError(
+                    f"layout {self.name!r}: {kind} station at (x={x}, y={y}) is on an obstacle"
+                )
+            mask.flags.writeable = False
+            object.__setattr__(self, kind, mask)
 
     @property
     def height(self) -> int:
@@ -99,6 +119,44 @@ class Layout:
         sizes[0] = 0
         ys, xs = np.nonzero(labels == int(sizes.argmax()))
         return np.stack([xs, ys], axis=1).astype(np.int64)
+
+    @cached_property
+    def compactness(self) -> float:
+        """Fraction of cells that are blocked (shelves)."""
+        return float(self.obstacles.mean())
+
+    def station_cells(self, kind: str) -> np.ndarray:
+        """``int64 [K, 2]`` ``(x, y)`` of the ``"pickup"`` or ``"delivery"`` stations in the
+        main connected region (empty when the layout marks none)."""
+        mask = getattr(self, kind)
+        if mask is None:
+            return np.empty((0, 2), dtype=np.int64)
+        main = np.zeros_like(mask)
+        main[self.main_cells[:, 1], self.main_cells[:, 0]] = True
+        ys, xs = np.nonzero(mask & main)
+        return np.stack([xs, ys], axis=1).astype(np.int64)
+
+    def describe(self) -> str:
+        """One line: size, free cells, compactness, connected regions, stations."""
+        sizes = np.bincount(self.component_labels.ravel())[1:]
+        regions = (
+            "1 connected region"
+            if len(sizes) == 1
+            else f"{len(sizes)} regions (largest {sizes.max()} cells; tasks and starts use it, "
+            f"{int(sizes.sum() - sizes.max())} free cells elsewhere are never used)"
+        )
+        stations = (
+            ", ".join(
+                f"{len(self.station_cells(k))} {k}"
+                for k in ("pickup", "delivery")
+                if getattr(self, k) is not None
+            )
+            or "no stations"
+        )
+        return (
+            f"{self.name}: {self.width}x{self.height}, {len(self.free_cells)} free cells, "
+            f"compactness {self.compactness:.2f}, {regions}, {stations}"
+        )
 
     def in_bounds(self, xy: np.ndarray) -> np.ndarray:
         """Whether each ``(x, y)`` row of ``xy [..., 2]`` lies inside the grid."""

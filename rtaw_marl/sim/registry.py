@@ -19,12 +19,15 @@ from rtaw_marl.sim.navigation import make_navigator
 from rtaw_marl.sim.tasks import (
     POC_TASKS,
     TWO_TASKS,
+    ClusteredTasks,
     DesignatedTasks,
     FixedTasks,
     RandomTasks,
+    StationTasks,
     TaskStream,
     load_task_csv,
 )
+from rtaw_marl.sim.warehouse_layouts import warehouse_grid, warehouse_preset
 
 __all__ = ["LAYOUTS", "TASK_STREAMS", "build_sim", "make_layout", "make_task_stream"]
 
@@ -40,12 +43,16 @@ def _file_tasks(path: str) -> TaskStream:
 LAYOUTS: dict[str, Callable[..., Layout]] = {
     "open": open_grid,
     "shelves": shelf_grid,
+    "warehouse": warehouse_grid,
+    "preset": warehouse_preset,
     "file": _file_layout,
 }
 
 TASK_STREAMS: dict[str, Callable[..., TaskStream]] = {
     "random": RandomTasks,
     "designated": DesignatedTasks,
+    "clustered": ClusteredTasks,
+    "stations": StationTasks,
     "file": _file_tasks,
     "poc": lambda: FixedTasks(POC_TASKS, name="poc tasks"),
     "two_task": lambda: FixedTasks(TWO_TASKS, refill_same_slot=True, name="two-task tasks"),
@@ -60,11 +67,11 @@ def make_layout(spec: str | Mapping[str, Any] | Layout) -> Layout:
     if isinstance(spec, Layout):
         return spec
     if isinstance(spec, str):
-        if spec in LAYOUTS and spec != "file":
+        if spec in LAYOUTS and spec not in ("file", "preset"):
             return LAYOUTS[spec]()
         if Path(spec).suffix:
             return load_layout(spec)
-        raise unknown_name("layout", spec, [k for k in LAYOUTS if k != "file"])
+        raise unknown_name("layout", spec, [k for k in LAYOUTS if k not in ("file", "preset")])
     params = dict(spec)
     path = params.pop("path", None)
     name = params.pop("name", None)

@@ -12,6 +12,11 @@ tasks for the same seed whatever it decides.
     uniformly, destination likewise around a delivery centre. Draws are rounded to the
     nearest cell; draws off the grid, on obstacles or outside the main region are
     redrawn (a truncated Gaussian). Defaults are the original RTAW code's five centres.
+``clustered``
+    Like ``designated`` but around ``num_clusters`` centres drawn per episode on free cells.
+``stations``
+    Origins uniform over the layout's pickup stations, destinations over its delivery
+    stations (generated warehouse layouts mark both).
 ``file``
     A fixed list read from a CSV file with header ``ox,oy,dx,dy``, one task per row in
     arrival order.
@@ -36,9 +41,11 @@ __all__ = [
     "DEFAULT_CENTRES",
     "POC_TASKS",
     "TWO_TASKS",
+    "ClusteredTasks",
     "DesignatedTasks",
     "FixedTasks",
     "RandomTasks",
+    "StationTasks",
     "TaskStream",
     "load_task_csv",
 ]
@@ -164,6 +171,51 @@ class DesignatedTasks(TaskStream):
             f"designated centre ({c[0]:g}, {c[1]:g}) has no reachable free cell within a few "
             f"sigma={self.sigma:g} on layout {layout.name!r}"
         )
+
+
+class ClusteredTasks(TaskStream):
+    """Tasks around ``num_clusters`` centres drawn per episode on free cells.
+
+    Unlike ``designated`` (fixed, configured centres), the clusters move with the episode
+    seed. Each origin and destination is drawn like a designated task around a uniformly
+    chosen cluster centre.
+
+    Args:
+        num_clusters: Number of cluster centres.
+        sigma: Standard deviation of each cluster in cells.
+    """
+
+    def __init__(self, num_clusters: int = 5, sigma: float = 4.0) -> None:
+        if int(num_clusters) < 1:
+            raise ConfigError(f"tasks.num_clusters must be >= 1, got {num_clusters}")
+        if not sigma > 0:
+            raise ConfigError(f"tasks.sigma must be > 0, got {sigma}")
+        self.num_clusters = int(num_clusters)
+        self.sigma = float(sigma)
+
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        cells = layout.main_cells
+        centres = cells[
+            rng.choice(len(cells), size=min(self.num_clusters, len(cells)), replace=False)
+        ]
+        return DesignatedTasks(centres, centres, self.sigma).generate(rng, layout, count)
+
+
+class StationTasks(TaskStream):
+    """Origins uniform over the layout's pickup stations, destinations over its delivery
+    stations (layouts from the warehouse generator mark both)."""
+
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        pickup, delivery = layout.station_cells("pickup"), layout.station_cells("delivery")
+        for kind, cells in (("pickup", pickup), ("delivery", delivery)):
+            if not len(cells):
+                raise ConfigError(
+                    f"tasks=stations: layout {layout.name!r} marks no reachable {kind} "
+                    "stations; use a generated warehouse layout (layout=A..E or warehouse)"
+                )
+        origin = pickup[rng.integers(len(pickup), size=count)]
+        dest = delivery[rng.integers(len(delivery), size=count)]
+        return np.concatenate([origin, dest], axis=1)
 
 
 class FixedTasks(TaskStream):

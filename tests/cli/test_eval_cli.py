@@ -44,6 +44,8 @@ def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Pat
         overrides += [f"tasks.path={tasks}", "env.num_tasks=20"]
     if (group, option) == ("tasks", "poc"):
         overrides += ["env.num_tasks=5", "layout=open"]
+    if (group, option) == ("tasks", "stations"):
+        overrides += ["layout=A"]
     if (group, option) == ("tasks", "two_task"):
         overrides += ["env.queue_len=2", "layout=open"]
     cfg = _compose(overrides)
