@@ -61,33 +61,38 @@ def run(cfg: DictConfig) -> dict:
 
 
 def _policies(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
-    """Baselines by name; ``checkpoint`` expands to one greedy policy per checkpoint path."""
-    checkpoints = cfg.checkpoint
-    paths = (
-        []
-        if checkpoints is None
-        else [checkpoints]
-        if isinstance(checkpoints, str)
-        else list(checkpoints)
-    )
-    if "checkpoint" in names and not paths:
-        raise ConfigError("policy=checkpoint needs checkpoint=PATH (or a list of paths)")
-    if paths and "checkpoint" not in names:
-        raise ConfigError("checkpoint=... given but policy does not include 'checkpoint'")
+    """Baselines by name; ``checkpoint`` expands to one greedy policy per checkpoint path,
+    ``rtaw`` to one per shipped pretrained policy named by ``pretrained``."""
+    sources = {"checkpoint": _as_list(cfg.checkpoint), "rtaw": _as_list(cfg.pretrained)}
+    for option, key in (("checkpoint", "checkpoint"), ("rtaw", "pretrained")):
+        if option in names and not sources[option]:
+            raise ConfigError(f"policy={option} needs {key}=... (one value or a list)")
+        if sources[option] and option not in names:
+            raise ConfigError(f"{key}=... given but policy does not include '{option}'")
     policies: dict[str, SimPolicy] = {}
     for name in names:
-        if name == "checkpoint":
-            import torch
-
-            from rtaw_marl.policies.checkpoint import load_policy
-
-            torch.set_num_threads(int(cfg.torch_threads))
-            for path in paths:
-                policy = load_policy(path)
-                policies[policy.name] = policy
-        else:
+        if name not in sources:
             policies[name] = make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale)
+            continue
+        import torch
+
+        from rtaw_marl.policies.checkpoint import load_policy
+        from rtaw_marl.pretrained.registry import pretrained_path
+
+        torch.set_num_threads(int(cfg.torch_threads))
+        for source in sources[name]:
+            if name == "checkpoint":
+                policy = load_policy(source)
+            else:
+                policy = load_policy(pretrained_path(source), name=f"rtaw:{source}")
+            policies[policy.name] = policy
     return policies
+
+
+def _as_list(value: object) -> list[str]:
+    if value is None:
+        return []
+    return [str(value)] if isinstance(value, str) else [str(v) for v in value]
 
 
 @hydra.main(config_path=str(CONF_DIR), config_name="eval", version_base="1.3")

@@ -1,0 +1,1 @@
+"""Pretrained RTAW policies shipped with the package (see :mod:`.registry`)."""
