@@ -15,7 +15,8 @@ from rtaw_marl.cli import CONF_DIR
 from rtaw_marl.cli.common import sim_from_cfg
 from rtaw_marl.cli.eval import run
 
-GROUPS = ("env", "layout", "navigator", "tasks", "scenario")
+GROUPS = ("env", "layout", "navigator", "tasks", "scenario", "row", "experiment")
+GLOBAL_GROUPS = ("scenario", "row", "experiment")  # packaged at the top level
 RTAW_EVAL = Path(sys.executable).with_name("rtaw-eval")
 
 
@@ -49,7 +50,7 @@ def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Pat
     if (group, option) == ("tasks", "two_task"):
         overrides += ["env.queue_len=2", "layout=open"]
     cfg = _compose(overrides)
-    assert cfg[group if group != "scenario" else "env"] is not None
+    assert cfg[group if group not in GLOBAL_GROUPS else "env"] is not None
     sim = sim_from_cfg(cfg)
     sim.reset(0)
     assert not sim.done
@@ -159,3 +160,18 @@ def test_every_training_option_composes(group: str, option: str) -> None:
     assert sum(p.numel() for p in actor.parameters()) > 0
     assert cfg.algo.frames_per_batch % cfg.algo.minibatch_size == 0
     assert 0 < cfg.algo.policy_coeff <= 1
+
+
+@pytest.mark.parametrize("launcher", ["basic", "joblib", "submitit_slurm"])
+def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
+    """experiment=table1 sweeps rows x robot counts; local and SLURM launchers compose."""
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose(
+            config_name="eval",
+            overrides=["experiment=table1", "row=D", f"hydra/launcher={launcher}"],
+            return_hydra_config=True,
+        )
+    assert cfg.hydra.sweeper.params == {"row": "direct,A,B,C,D,E", "env.num_robots": "10,100"}
+    assert (cfg.layout.preset, cfg.navigator.name, cfg.pretrained) == ("D", "astar", "D_astar_m10")
+    assert cfg.env.episode_mode == "paper"
+    assert list(cfg.policy) == ["mpdm", "rbts", "rtaw"]
