@@ -37,6 +37,9 @@ def main(names: list[str]) -> int:
         out = ROOT / "rtaw_marl" / "pretrained" / f"{name}.pt"
         payload = {k: v for k, v in ckpt.items() if k not in ("format", "features", "versions")}
         save_checkpoint(out, payload)
+        curve = ROOT / "docs" / "img" / f"training_{name}.png"
+        curve.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(run_dir / "training_curve.png", curve)
         print(f"{name}: best eval TTD {ckpt['eval']['ttd']:.1f} -> {out}", flush=True)
     return 0
 

@@ -36,6 +36,7 @@ def run(cfg: DictConfig) -> dict:
     if not seeds or not all(isinstance(s, int) for s in seeds):
         raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
     sim = sim_from_cfg(cfg)
+    print(f"layout {sim.layout.describe()}")
     policies = _policies(cfg, names, sim)
     total = len(policies) * len(seeds) * sim.config.num_tasks
     with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:

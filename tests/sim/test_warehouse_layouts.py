@@ -119,3 +119,14 @@ def test_station_tasks_use_the_stations() -> None:
 def test_station_tasks_need_stations() -> None:
     with pytest.raises(ConfigError, match="marks no reachable pickup stations"):
         StationTasks().generate(np.random.default_rng(0), make_layout("shelves"), 10)
+
+
+@pytest.mark.parametrize("preset", sorted(PRESETS))
+def test_ascii_exports_in_docs_match_the_generator(preset: str) -> None:
+    """docs/layouts/<P>.txt (written by experiments/export_layouts.py) is layout <P>."""
+    from pathlib import Path
+
+    from rtaw_marl.sim.layout import load_layout
+
+    path = Path(__file__).resolve().parents[2] / "docs" / "layouts" / f"{preset}.txt"
+    assert np.array_equal(load_layout(path).obstacles, warehouse_preset(preset).obstacles)
