@@ -166,7 +166,8 @@ def plot_table1(data: dict, path: Path) -> None:
         means = [np.mean(data[k][name]) for k in keys]
         stds = [np.std(data[k][name]) for k in keys]
         ax.bar(x + (i - 1) * 0.27, means, 0.27, yerr=stds, capsize=2, label=name)
-    ax.set_xticks(x, [f"{k[0].replace('A* layout ', '')}\nM={k[1]}" for k in keys], fontsize=7)
+    labels = [k[0].replace("A* layout ", "").split(" (")[0] for k in keys]
+    ax.set_xticks(x, [f"{lab}\nM={k[1]}" for lab, k in zip(labels, keys, strict=True)], fontsize=8)
     ax.set_ylabel("TTD (s), 500 tasks, seeds 0-4")
     ax.legend()
     fig.tight_layout()
