@@ -242,9 +242,12 @@ def test_make_task_stream_builds_streams(tmp_path: Path) -> None:
     [
         (
             "uniform",
-            "unknown task stream 'uniform'; available: designated, file, poc, random, two_task",
+            "unknown task stream 'uniform'; available: clustered, designated, file, poc, random, stations, two_task",
         ),
-        ({"name": "nope"}, "available: designated, file, poc, random, two_task"),
+        (
+            {"name": "nope"},
+            "available: clustered, designated, file, poc, random, stations, two_task",
+        ),
         ({"sigma": 2.0}, "needs a 'name'"),
         ({"name": "random", "sigma": 2.0}, r"unknown parameters \['sigma'\].*available: none"),
         (
@@ -279,9 +282,9 @@ def test_make_layout_builds_layouts(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("spec", "match", "error"),
     [
-        ("warehouse", "unknown layout 'warehouse'; available: open, shelves", ConfigError),
-        ("file", "unknown layout 'file'; available: open, shelves", ConfigError),
-        ({"name": "maze"}, "available: file, open, shelves", ConfigError),
+        ("maze", "unknown layout 'maze'; available: open, shelves, warehouse", ConfigError),
+        ("file", "unknown layout 'file'; available: open, shelves, warehouse", ConfigError),
+        ({"name": "maze"}, "available: file, open, preset, shelves, warehouse", ConfigError),
         ({"width": 5}, "needs a 'name'", ConfigError),
         (
             {"name": "shelves", "rows": 3},
