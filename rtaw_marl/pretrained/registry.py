@@ -23,7 +23,17 @@ PRETRAINED: dict[str, list[str]] = {
         f"{p}_astar_m10": [f"layout={p}", "navigator=astar", "env.num_robots=10", *_COMMON]
         for p in "ABCDE"
     },
-}
+    "open60_direct_m100": ["layout=open", "navigator=direct", "env.num_robots=100", *_COMMON],
+    # Scalability (Table II): large grids with random tasks spread over the whole grid.
+    "open300_direct_m100_random": [
+        "layout=open", "layout.width=300", "layout.height=300", "navigator=direct",
+        "tasks=random", "env.num_robots=100", *_COMMON,
+    ],
+    "C256_astar_m100_random": [
+        "layout=C", "layout.width=256", "layout.height=256", "navigator=astar",
+        "tasks=random", "env.num_robots=100", *_COMMON,
+    ],
+}  # fmt: skip
 
 
 def train_command(name: str, run_dir: Path) -> list[str]:
