@@ -16,6 +16,7 @@ from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.sim.tasks import FixedTasks
+from tests.training.conftest import POC_ENV, POC_LAYOUT
 
 
 @pytest.mark.parametrize(
@@ -46,16 +47,8 @@ def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots:
 
 def test_bound_below_poc_optimum() -> None:
     sim = build_sim(
-        {
-            "num_robots": 2,
-            "num_tasks": 5,
-            "queue_len": 2,
-            "noise_mean": 0.0,
-            "noise_var": 0.0,
-            "robot_starts": [[2, 2], [6, 2]],
-            "robot_free_times": [0.0, 2.0],
-        },
-        {"name": "open", "width": 10, "height": 10},
+        POC_ENV,
+        POC_LAYOUT,
         "direct",
         "poc",
     )
