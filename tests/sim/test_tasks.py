@@ -242,7 +242,8 @@ def test_make_task_stream_builds_streams(tmp_path: Path) -> None:
     [
         (
             "uniform",
-            "unknown task stream 'uniform'; available: clustered, designated, file, poc, random, stations, two_task",
+            "unknown task stream 'uniform'; available: clustered, designated, file, poc, "
+            "random, stations, two_task",
         ),
         (
             {"name": "nope"},
