@@ -19,15 +19,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.checkpoint import load_policy
 from rtaw_marl.sim.registry import build_sim
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from paper_tables import SEEDS, replace_section
+from paper_tables import SEEDS, _imp, _ms, replace_section
 
 ROOT = Path(__file__).resolve().parents[1]
 REWARDS = ("ttd", "length", "ttd_length")
@@ -54,14 +52,12 @@ def table(runs: dict[str, Path]) -> str:
         {f"RTAW, reward={r}": load_policy(p / "checkpoints" / "best.pt") for r, p in runs.items()}
     )
     res = evaluate(sim, policies, SEEDS)
-    mpdm = np.asarray(res["MPDM"]["ttd"])
+    mpdm = res["MPDM"]["ttd"]
     lines = ["| policy | TTD | makespan | TTD vs MPDM (%) |", "|---|---|---|---|"]
     for name, metrics in res.items():
-        ttd, mk = np.asarray(metrics["ttd"]), np.asarray(metrics["makespan"])
-        imp = 100 * (mpdm - ttd) / mpdm
         lines.append(
-            f"| {name} | {ttd.mean():.0f} ± {ttd.std():.0f} | {mk.mean():.0f} ± {mk.std():.0f} "
-            f"| {imp.mean():+.1f} ± {imp.std():.1f} |"
+            f"| {name} | {_ms(metrics['ttd'])} | {_ms(metrics['makespan'])} "
+            f"| {_imp(mpdm, metrics['ttd'])} |"
         )
         print(lines[-1], flush=True)
     return "\n".join(lines)
