@@ -40,3 +40,15 @@ def unknown_name(kind: str, name: str, available: list[str] | tuple[str, ...]) -
         A :class:`ConfigError` to raise.
     """
     return ConfigError(f"unknown {kind} {name!r}; available: {', '.join(sorted(available))}")
+
+
+class PlanningError(RtawError, RuntimeError):
+    """A collision-aware navigator could not complete the tasks it was given."""
+
+
+class PlanningTimeout(PlanningError):
+    """One planning call ran past the navigator's ``time_limit``."""
+
+
+class ScheduleError(RtawError, AssertionError):
+    """An executed schedule breaks a rule: a conflict, an illegal move, a task not served."""

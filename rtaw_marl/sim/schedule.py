@@ -1,0 +1,57 @@
+"""An executed episode in space and time: where every robot was at every second.
+
+Collision-aware navigators (``sipp``, ``cbs``) produce a :class:`Schedule` when an
+episode ends. It is the common currency of the conflict checker
+(:mod:`rtaw_marl.sim.conflicts`), which validates it on its own code path, and of the
+GIF renderer (:mod:`rtaw_marl.evaluation.render`).
+
+Time is discrete (1 s per step). Cells are ``(x, y)`` with ``x`` the column and ``y``
+the row of :attr:`rtaw_marl.sim.layout.Layout.obstacles`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Schedule"]
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Positions of all robots at integer times and the life of every served task.
+
+    Attributes:
+        positions: ``int64 [T + 1, M, 2]`` cell of robot ``m`` at time ``t`` for
+            ``t = 0 .. T``; after its last move a robot stays where it is.
+        tasks: ``int64 [K, 4]`` ``(ox, oy, dx, dy)`` of each task that was assigned.
+        task_robot: ``int64 [K]`` robot that served each task.
+        task_arrival: ``int64 [K]`` time the task entered the queue.
+        task_assigned: ``int64 [K]`` decision time at which the robot got the task.
+        task_pickup: ``int64 [K]`` time the robot reached the origin (the pickup).
+        task_delivered: ``int64 [K]`` time the robot reached the destination.
+    """
+
+    positions: np.ndarray
+    tasks: np.ndarray
+    task_robot: np.ndarray
+    task_arrival: np.ndarray
+    task_assigned: np.ndarray
+    task_pickup: np.ndarray
+    task_delivered: np.ndarray
+
+    @property
+    def num_robots(self) -> int:
+        """``M``."""
+        return int(self.positions.shape[1])
+
+    @property
+    def horizon(self) -> int:
+        """``T``, the last time step covered by :attr:`positions`."""
+        return int(self.positions.shape[0]) - 1
+
+    @property
+    def task_ttd(self) -> np.ndarray:
+        """``int64 [K]`` empty travel time per task: pickup minus assignment, waits included."""
+        return self.task_pickup - self.task_assigned
