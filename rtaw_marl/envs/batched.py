@@ -39,8 +39,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.core import SimBuffers, SimConfig, WarehouseSim
 from rtaw_marl.sim.features import OBSERVATION_KEYS, robot_features, task_features
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.navigation import make_navigator
-from rtaw_marl.sim.registry import make_layout, make_task_stream, sim_config
+from rtaw_marl.sim.registry import make_layout, make_navigator, make_task_stream, sim_config
 from rtaw_marl.sim.tasks import TaskStream
 
 __all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]

@@ -19,6 +19,15 @@ Episode modes (``episode_mode``):
     *truncated* (a time limit, not a terminal state).
 
 Per decision the work is a handful of numpy calls over ``M`` robots and ``N`` slots.
+
+Collision-aware navigators (``sipp``, ``cbs``) replace the distance model of travel by
+a :class:`~rtaw_marl.sim.fleet.Fleet` executing every task on the shared grid in whole
+seconds: a task's TTD is the real arrival time at its origin minus the decision time,
+waits included, and a robot is free when its planned path reaches the destination.
+The reward of a decision is the TTD as planned at that decision (its single-robot
+distance while the robot has to wait to plan); :meth:`WarehouseSim.metrics` reports
+the executed times, final once the episode is done and the fleet has delivered every
+assigned task. :meth:`WarehouseSim.schedule` returns the executed episode.
 """
 
 from __future__ import annotations
@@ -31,6 +40,7 @@ from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
 from rtaw_marl.sim.navigation import Navigator
+from rtaw_marl.sim.schedule import Schedule
 from rtaw_marl.sim.tasks import TaskStream
 
 __all__ = ["EPISODE_MODES", "REWARDS", "SimBuffers", "SimConfig", "WarehouseSim"]
@@ -217,6 +227,9 @@ class WarehouseSim:
         self.queue_rows = buffers.queue_rows
         self.queue_length = buffers.queue_length
         self.queue_ids = np.full(config.queue_len, -1, dtype=np.int64)
+        self._fleet = navigator.make_fleet(config.num_robots)
+        if self._fleet is not None:
+            _check_whole_seconds(config, navigator.name)
         self.done = True
         self.truncated = False
 
@@ -272,6 +285,8 @@ class WarehouseSim:
             self._enqueue(slot, slot)
         self._next_task = first
 
+        if self._fleet is not None:
+            self._fleet.reset(starts, self.robot_free_at, total)
         self.decisions = 0
         self.done = False
         self.truncated = False
@@ -342,16 +357,22 @@ class WarehouseSim:
         dist = self._dist if self._dist is not None else self.robot_distances()
         ttd = float(dist[slot])
         length = float(self.queue_length[slot])
-        finish = now + ttd + length + float(self._noise[self.decisions])
-        if finish < now:
-            finish = now
+        if self._fleet is not None:
+            ttd, finish = self._fleet_assign(robot, int(now), task, slot, ttd + length)
+        else:
+            finish = now + ttd + length + float(self._noise[self.decisions])
+            if finish < now:
+                finish = now
 
         self.task_assigned[task] = now
         self.task_ttd[task] = ttd
         self.task_finished[task] = finish
         self.task_robot[task] = robot
         self.robot_xy[robot] = self.queue_rows[slot, 2:]
-        self.robot_free_at[robot] = finish
+        if self._fleet is None:
+            self.robot_free_at[robot] = finish
+        else:
+            self.robot_free_at[:] = self._fleet.estimated_free_at
         # Busy from assignment until free again (noise included), so idle >= 0.
         self.robot_busy[robot] += finish - now
         self._refill(slot, task, now)
@@ -362,6 +383,8 @@ class WarehouseSim:
             self.done = True
             self.truncated = self._paper
             self._dist = None  # the acting robot has moved: its cached distances are stale
+            if self._fleet is not None:
+                self._fleet_finish(now)
         else:
             self._select_next_robot()
 
@@ -398,9 +421,71 @@ class WarehouseSim:
         self.queue_length[slot] = length
 
     def _select_next_robot(self) -> None:
-        self.robot = int(self.robot_free_at.argmin())
-        self.time = float(self.robot_free_at[self.robot])
+        if self._fleet is None:
+            self.robot = int(self.robot_free_at.argmin())
+            self.time = float(self.robot_free_at[self.robot])
+        else:
+            free_at = self._fleet.free_at
+            if np.isinf(free_at.min()):
+                # Every robot waits for another: move some aside (or raise PlanningError).
+                self._fleet.resolve(int(self.time))
+                self.robot_free_at[:] = self._fleet.estimated_free_at
+            self.robot = int(free_at.argmin())
+            self.time = float(free_at[self.robot])
         self._dist = None
+
+    # ------------------------------------------------------------------ collision-aware
+    def _fleet_assign(
+        self, robot: int, now: int, task: int, slot: int, estimate: float
+    ) -> tuple[float, float]:
+        """Plan ``task`` for ``robot``; the planned ``(ttd, finish)`` (estimates if deferred)."""
+        fleet = self._fleet
+        ox, oy, dx, dy = self.queue_rows[slot].tolist()
+        fleet.assign(robot, now, task, (ox, oy), (dx, dy))
+        pickup, delivered = int(fleet.task_pickup[task]), int(fleet.task_delivered[task])
+        if pickup < 0:
+            return estimate - float(self.queue_length[slot]), now + estimate
+        return float(pickup - now), float(delivered if delivered >= 0 else pickup + estimate)
+
+    def _fleet_finish(self, now: float) -> None:
+        """Deliver every assigned task, then record the executed times."""
+        fleet = self._fleet
+        fleet.finish(int(now))
+        served = np.flatnonzero(self.task_robot >= 0)
+        self.task_ttd[served] = fleet.task_pickup[served] - self.task_assigned[served]
+        self.task_finished[served] = fleet.task_delivered[served]
+        self.robot_busy[:] = np.bincount(
+            self.task_robot[served],
+            weights=self.task_finished[served] - self.task_assigned[served],
+            minlength=self.num_robots,
+        )
+        self.robot_free_at[:] = fleet.estimated_free_at
+
+    def schedule(self) -> Schedule:
+        """The executed episode: every robot's cell at every second and each task's times.
+
+        Raises:
+            ConfigError: The navigator moves robots independently (``direct``, ``astar``).
+            InvalidActionError: The episode is not over.
+        """
+        if self._fleet is None:
+            raise ConfigError(
+                f"navigator {self.navigator.name!r} moves robots independently and has no "
+                "schedule; use navigator=sipp or navigator=cbs"
+            )
+        if not self.done:
+            raise InvalidActionError("the schedule is complete only when the episode is done")
+        served = np.flatnonzero(self.task_robot >= 0)
+        fleet = self._fleet
+        return Schedule(
+            positions=fleet.positions(),
+            tasks=self.tasks[served].copy(),
+            task_robot=self.task_robot[served].copy(),
+            task_arrival=self.task_arrival[served].astype(np.int64),
+            task_assigned=self.task_assigned[served].astype(np.int64),
+            task_pickup=fleet.task_pickup[served].copy(),
+            task_delivered=fleet.task_delivered[served].copy(),
+        )
 
     # ------------------------------------------------------------------ results
     def metrics(self) -> EpisodeMetrics:
@@ -421,4 +506,18 @@ class WarehouseSim:
             self.task_finished,
             self.robot_busy,
             self.decisions,
+        )
+
+
+def _check_whole_seconds(config: SimConfig, navigator: str) -> None:
+    """Collision-aware navigators plan in whole seconds: no completion noise, integer starts."""
+    if config.noise_mean != 0 or config.noise_var != 0:
+        raise ConfigError(
+            f"navigator {navigator!r} plans paths in whole seconds and times tasks by them: "
+            f"set env.noise_mean=0 env.noise_var=0 (got {config.noise_mean}, {config.noise_var})"
+        )
+    times = config.robot_free_times or ()
+    if any(t != int(t) for t in times):
+        raise ConfigError(
+            f"navigator {navigator!r} needs whole-second env.robot_free_times, got {list(times)}"
         )

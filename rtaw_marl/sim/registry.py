@@ -1,8 +1,8 @@
-"""Named layouts and task streams, built from plain config mappings.
+"""Named layouts, navigators and task streams, built from plain config mappings.
 
 Each option is a builder with explicit keyword parameters; a spec is a mapping with a
-``name`` key plus those parameters (the Hydra ``layout``/``tasks`` groups are such
-mappings). Unknown names and unknown parameters fail with the list of what exists.
+``name`` key plus those parameters (the Hydra ``layout``/``navigator``/``tasks`` groups
+are such mappings). Unknown names and unknown parameters fail with the list of what exists.
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ from typing import Any
 from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
 from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
-from rtaw_marl.sim.navigation import make_navigator
+from rtaw_marl.sim.navigation import AStarNavigator, DirectNavigator, Navigator
+from rtaw_marl.sim.path_navigators import CBSNavigator, SIPPNavigator
 from rtaw_marl.sim.tasks import (
     POC_TASKS,
     TWO_TASKS,
@@ -29,7 +30,15 @@ from rtaw_marl.sim.tasks import (
 )
 from rtaw_marl.sim.warehouse_layouts import warehouse_grid, warehouse_preset
 
-__all__ = ["LAYOUTS", "TASK_STREAMS", "build_sim", "make_layout", "make_task_stream"]
+__all__ = [
+    "LAYOUTS",
+    "NAVIGATORS",
+    "TASK_STREAMS",
+    "build_sim",
+    "make_layout",
+    "make_navigator",
+    "make_task_stream",
+]
 
 
 def _file_layout(path: str) -> Layout:
@@ -46,6 +55,13 @@ LAYOUTS: dict[str, Callable[..., Layout]] = {
     "warehouse": warehouse_grid,
     "preset": warehouse_preset,
     "file": _file_layout,
+}
+
+NAVIGATORS: dict[str, Callable[..., Navigator]] = {
+    "direct": DirectNavigator,
+    "astar": AStarNavigator,
+    "sipp": SIPPNavigator,
+    "cbs": CBSNavigator,
 }
 
 TASK_STREAMS: dict[str, Callable[..., TaskStream]] = {
@@ -82,6 +98,22 @@ def make_layout(spec: str | Mapping[str, Any] | Layout) -> Layout:
     return _call("layout", LAYOUTS, name, params)
 
 
+def make_navigator(spec: str | Mapping[str, Any], layout: Layout) -> Navigator:
+    """Build a navigator for ``layout`` from a name or a ``{"name": ..., **params}`` mapping.
+
+    Raises:
+        ConfigError: The name is not registered (the message lists those that are) or a
+            parameter is unknown.
+    """
+    params = {"name": spec} if isinstance(spec, str) else dict(spec)
+    name = params.pop("name", None)
+    if name is None:
+        raise ConfigError("navigator config needs a 'name'")
+    if name not in NAVIGATORS:
+        raise unknown_name("navigator", name, list(NAVIGATORS))
+    return _call("navigator", NAVIGATORS, name, {"layout": layout, **params})
+
+
 def make_task_stream(spec: str | Mapping[str, Any] | TaskStream) -> TaskStream:
     """Build a task stream from a name, a ``{"name": ..., **params}`` mapping or a TaskStream."""
     if isinstance(spec, TaskStream):
@@ -98,7 +130,7 @@ def make_task_stream(spec: str | Mapping[str, Any] | TaskStream) -> TaskStream:
 def build_sim(
     env: Mapping[str, Any] | SimConfig,
     layout: str | Mapping[str, Any] | Layout,
-    navigator: str,
+    navigator: str | Mapping[str, Any],
     tasks: str | Mapping[str, Any] | TaskStream,
 ) -> WarehouseSim:
     """Build a :class:`WarehouseSim` from config values.
@@ -106,7 +138,7 @@ def build_sim(
     Args:
         env: :class:`SimConfig` or a mapping of its fields (the ``env.*`` keys).
         layout: Layout spec (see :func:`make_layout`).
-        navigator: Navigator name (``direct`` or ``astar``).
+        navigator: Navigator name (``direct``, ``astar``, ``sipp``, ``cbs``) or mapping.
         tasks: Task stream spec (see :func:`make_task_stream`).
     """
     config = env if isinstance(env, SimConfig) else sim_config(env)

@@ -17,8 +17,8 @@ from rtaw_marl.sim.navigation import (
     DirectNavigator,
     Navigator,
     TargetSlots,
-    make_navigator,
 )
+from rtaw_marl.sim.registry import make_navigator
 
 FAST = settings(max_examples=30, deadline=None, database=None)
 

@@ -1,0 +1,362 @@
+"""Robots executing their tasks on the grid without collisions (the ``sipp``/``cbs`` model).
+
+A :class:`Fleet` owns, for one episode, where every robot is at every integer time
+(its *timeline*) and the goals (*legs*) it still has to reach. The simulator's
+event-driven loop calls :meth:`Fleet.assign` when it gives a task to a free robot;
+the fleet plans the robot's way to the task's origin and on to its destination and
+reports the planned delivery time, which is when the robot is free again.
+
+Execution model (discrete time, 1 s per step): a robot moves to a 4-connected
+neighbour or waits; two robots never share a cell nor swap cells; a robot that has
+reached its last goal holds that cell until it gets a new task.
+
+Blocking. A robot's goal can be held by another robot, or a corridor can be closed by
+robots standing in it. A robot that cannot plan is *deferred*: it waits where it is
+(holding its cell) and is retried whenever another robot commits a new trajectory,
+because only then do holds change. With SIPP a robot that can reach its origin but not
+its destination goes to the origin and is deferred there. When a deferred robot is
+blocked by robots that will not move by themselves (deferred or, once the last task
+is assigned, idle), those are moved off its way: each goes to the nearest cell that is
+off the blocked robot's shortest route and is nobody's goal or parking cell. A fleet
+that still cannot move raises :class:`~rtaw_marl.errors.PlanningError`, never hangs.
+
+Strategies: :class:`SIPPFleet` (prioritized planning: each newly assigned robot plans
+around all earlier trajectories, which never change) and :class:`CBSFleet`
+(Conflict-Based Search over every moving robot at each assignment: trajectories are
+re-planned jointly from the current time, the past never changes).
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from rtaw_marl.errors import PlanningError, PlanningTimeout
+from rtaw_marl.sim.cbs import cbs_solve
+from rtaw_marl.sim.navigation import AStarNavigator
+from rtaw_marl.sim.reservations import ReservationTable
+from rtaw_marl.sim.sipp import sipp_plan
+
+__all__ = ["CBSFleet", "Fleet", "SIPPFleet"]
+
+PICKUP, DELIVER, PARK = 0, 1, 2
+_KINDS = ("pickup", "delivery", "parking")
+
+
+@dataclass
+class Leg:
+    """A goal of a robot: a task's origin or destination, or a parking cell."""
+
+    cell: int
+    task: int
+    kind: int
+    time: int | None = None  # planned arrival; None while not planned
+
+
+class Fleet:
+    """Collision-free execution of assigned tasks; subclasses choose the planner.
+
+    Args:
+        navigator: Single-robot distances and paths on the layout (heuristics).
+        num_robots: ``M``.
+        time_limit: Seconds one planning call may take.
+    """
+
+    name = ""
+
+    def __init__(self, navigator: AStarNavigator, num_robots: int, time_limit: float) -> None:
+        self.nav = navigator
+        self.num_robots = num_robots
+        self.time_limit = time_limit
+        self._wp = navigator._wp
+        self._free = navigator._free_padded.tolist()
+        self.free_at = np.zeros(num_robots, dtype=np.float64)
+        self.estimated_free_at = np.zeros(num_robots, dtype=np.float64)
+
+    # ------------------------------------------------------------------ episode
+    def reset(self, starts: np.ndarray, free_at: np.ndarray, num_tasks: int) -> None:
+        """Robots at ``starts [M, 2]``, first free at integer times ``free_at [M]``."""
+        cells = self.nav._padded_index(starts).tolist()
+        self.timeline: list[list[int]] = [[c] for c in cells]
+        self.legs: list[list[Leg]] = [[] for _ in range(self.num_robots)]
+        self.free_at[:] = free_at
+        self.estimated_free_at[:] = free_at
+        self.task_pickup = np.full(num_tasks, -1, dtype=np.int64)
+        self.task_delivered = np.full(num_tasks, -1, dtype=np.int64)
+        self.closing = False
+        self.planning_calls = 0
+        self.evacuations = 0
+
+    def assign(self, robot: int, now: int, task: int, origin: tuple[int, int],
+               destination: tuple[int, int]) -> None:  # fmt: skip
+        """Give ``task`` to ``robot`` (free at ``now``), plan it, and retry deferred robots."""
+        o, d = (int(c) for c in self.nav._padded_index(np.array([origin, destination])))
+        self.legs[robot] = [leg for leg in self.legs[robot] if leg.time is None or leg.time > now]
+        self.legs[robot] += [Leg(o, task, PICKUP), Leg(d, task, DELIVER)]
+        self._budget = 2 * self.num_robots
+        self._serve(robot, now)
+        self._retry(now)
+
+    def finish(self, now: int) -> None:
+        """Complete every assigned task; idle robots may now be moved out of the way.
+
+        Raises:
+            PlanningError: Some robots stay blocked.
+        """
+        self.closing = True
+        self._budget = 4 * self.num_robots
+        self._retry(now)
+        if self.deferred():
+            self.resolve(now)
+
+    def resolve(self, now: int) -> None:
+        """Unblock deferred robots once every robot has stopped moving (no robot is free).
+
+        Raises:
+            PlanningError: No deferred robot can move even then.
+        """
+        while self.deferred():
+            later = max(now, max(len(t) - 1 for t in self.timeline))
+            before = sum(len(t) for t in self.timeline), len(self.deferred())
+            self._retry(later)
+            if (sum(len(t) for t in self.timeline), len(self.deferred())) == before:
+                raise PlanningError(self._blocked_message(later))
+            if not self.closing:
+                return
+
+    def deferred(self) -> list[int]:
+        """Robots with legs not yet planned."""
+        return [r for r in range(self.num_robots) if self._pending(r)]
+
+    def positions(self) -> np.ndarray:
+        """``int64 [T + 1, M, 2]`` cell ``(x, y)`` of every robot at every time."""
+        horizon = max(len(t) for t in self.timeline)
+        flat = np.array([t + [t[-1]] * (horizon - len(t)) for t in self.timeline]).T
+        return np.stack([flat % self._wp - 1, flat // self._wp - 1], axis=-1).astype(np.int64)
+
+    # ------------------------------------------------------------------ planning
+    def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
+        """Plan ``robot`` through ``legs`` (and commit) or return False."""
+        raise NotImplementedError
+
+    def _serve(self, robot: int, now: int) -> bool:
+        pending = self._pending(robot)
+        tries = [pending] if len(pending) == 1 or not self._partial else [pending, pending[:1]]
+        for attempt in range(2):
+            if any(self._plan(robot, now, legs) for legs in tries):
+                self._refresh(robot, now)
+                return True
+            if attempt == 0 and not self._evacuate_for(robot, now):
+                break
+        self._refresh(robot, now)
+        return False
+
+    def _retry(self, now: int) -> None:
+        progress = True
+        while progress:
+            progress = False
+            for robot in self.deferred():
+                if self._end(robot) <= now or self._partial:
+                    progress |= self._serve(robot, now)
+
+    def _evacuate_for(self, robot: int, now: int) -> bool:
+        """Move robots that will not move by themselves off ``robot``'s route."""
+        if self._budget <= 0:
+            return False
+        route = self._route(robot)
+        stuck = [
+            k for k in range(self.num_robots)
+            if k != robot and self._end(k) <= now and self.timeline[k][-1] in route
+            and (self._pending(k) or self.closing)
+        ]  # fmt: skip
+        moved = False
+        for k in stuck:
+            taken = self._taken_cells()
+            for cell in self._parking_cells(self.timeline[k][-1], route | taken):
+                leg = Leg(cell, -1, PARK)
+                pending = self._pending(k)
+                self.legs[k] = [g for g in self.legs[k] if g.time is not None] + [leg]
+                ok = self._plan(k, now, [leg])
+                self.legs[k] += pending
+                if ok:
+                    self._budget -= 1
+                    self.evacuations += 1
+                    self._refresh(k, now)
+                    moved = True
+                    break
+                self.legs[k].remove(leg)
+        return moved
+
+    def _route(self, robot: int) -> set[int]:
+        """Cells of ``robot``'s single-robot shortest route through its pending legs."""
+        cells = {self.timeline[robot][-1]}
+        here = self._xy(self.timeline[robot][-1])
+        for leg in self._pending(robot):
+            there = self._xy(leg.cell)
+            cells.update(self.nav._padded_index(self.nav.path(here, there)).tolist())
+            here = there
+        return cells
+
+    def _taken_cells(self) -> set[int]:
+        taken = {t[-1] for t in self.timeline}
+        for legs in self.legs:
+            taken.update(leg.cell for leg in legs)
+        return taken
+
+    def _parking_cells(self, start: int, avoid: set[int], count: int = 6) -> list[int]:
+        """The ``count`` nearest free cells from ``start`` (BFS) not in ``avoid``."""
+        seen, queue, found = {start}, deque([start]), []
+        while queue and len(found) < count:
+            cell = queue.popleft()
+            for nxt in (cell + 1, cell - 1, cell + self._wp, cell - self._wp):
+                if self._free[nxt] and nxt not in seen:
+                    seen.add(nxt)
+                    queue.append(nxt)
+                    if nxt not in avoid:
+                        found.append(nxt)
+        return found
+
+    # ------------------------------------------------------------------ bookkeeping
+    _partial = False
+
+    def _pending(self, robot: int) -> list[Leg]:
+        return [leg for leg in self.legs[robot] if leg.time is None]
+
+    def _end(self, robot: int) -> int:
+        return len(self.timeline[robot]) - 1
+
+    def _xy(self, cell: int) -> tuple[int, int]:
+        return cell % self._wp - 1, cell // self._wp - 1
+
+    def _deadline(self) -> float:
+        self.planning_calls += 1
+        return time.perf_counter() + self.time_limit
+
+    def _timeout(self, exc: PlanningTimeout, robots: list[int], now: int) -> PlanningTimeout:
+        return PlanningTimeout(
+            f"navigator {self.name}: planning robot(s) {robots} at t={now} ran past "
+            f"navigator.time_limit={self.time_limit:g} s ({exc})"
+        )
+
+    def _commit(self, robot: int, t0: int, cells: list[int], legs: list[Leg],
+                goal_times: list[int]) -> None:  # fmt: skip
+        line = self.timeline[robot]
+        del line[t0 + 1 :]
+        line.extend([line[-1]] * (t0 + 1 - len(line)))
+        line.extend(cells[1:])
+        for leg, t in zip(legs, goal_times, strict=True):
+            leg.time = int(t)
+            if leg.kind == PICKUP:
+                self.task_pickup[leg.task] = t
+            elif leg.kind == DELIVER:
+                self.task_delivered[leg.task] = t
+
+    def _refresh(self, robot: int, now: int) -> None:
+        pending = self._pending(robot)
+        end = self._end(robot)
+        last = next((g for g in reversed(self.legs[robot]) if g.kind != PARK), None)
+        if not pending:
+            free = last.time if last is not None and last.time is not None else end
+            self.free_at[robot] = self.estimated_free_at[robot] = max(free, 0)
+            return
+        self.free_at[robot] = np.inf
+        here, total = self._xy(self.timeline[robot][-1]), 0.0
+        for leg in pending:
+            there = self._xy(leg.cell)
+            total += float(self.nav.distance(np.array([here]), np.array([there]))[0])
+            here = there
+        self.estimated_free_at[robot] = max(now, end) + total
+
+    def _blocked_message(self, now: int) -> str:
+        parts = []
+        for r in self.deferred()[:5]:
+            leg = self._pending(r)[0]
+            x, y = self._xy(leg.cell)
+            at = self._xy(self.timeline[r][-1])
+            parts.append(
+                f"robot {r} at (x={at[0]}, y={at[1]}) cannot reach the {_KINDS[leg.kind]} "
+                f"cell (x={x}, y={y}) of task {leg.task}"
+            )
+        return (
+            f"navigator {self.name}: the robots are deadlocked at t={now}: "
+            + "; ".join(parts)
+            + " (robots hold their cells; the layout has no room to move them aside)"
+        )
+
+
+class SIPPFleet(Fleet):
+    """Prioritized planning with SIPP over a reservation table of all trajectories."""
+
+    name = "sipp"
+    _partial = True
+
+    def reset(self, starts: np.ndarray, free_at: np.ndarray, num_tasks: int) -> None:
+        super().reset(starts, free_at, num_tasks)
+        self.table = ReservationTable(self.num_robots)
+        for robot, line in enumerate(self.timeline):
+            self.table.reserve(robot, 0, line)
+
+    def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
+        t0 = max(now, self._end(robot))
+        start = self.timeline[robot][-1]
+        goals = [leg.cell for leg in legs]
+        fields = [self.nav.field(*self._xy(g)) for g in goals]
+        self.table.release_from(robot, t0)
+        try:
+            found = sipp_plan(self.table, self._free, self._wp, start, t0, goals, fields,
+                              self._deadline())  # fmt: skip
+        except PlanningTimeout as exc:
+            raise self._timeout(exc, [robot], t0) from None
+        if found is None:
+            self.table.reserve(robot, t0, [start])
+            return False
+        cells, times = found
+        self.table.reserve(robot, t0, cells)
+        self._commit(robot, t0, cells, legs, times)
+        return True
+
+
+class CBSFleet(Fleet):
+    """Conflict-Based Search, re-planned jointly over all moving robots at each assignment."""
+
+    name = "cbs"
+
+    def __init__(self, navigator: AStarNavigator, num_robots: int, time_limit: float) -> None:
+        super().__init__(navigator, num_robots, time_limit)
+        self._grid_free = ~navigator.layout.obstacles
+        self._shape = (navigator.layout.height + 2, navigator.layout.width + 2)
+
+    def _heuristic(self, x: int, y: int) -> np.ndarray:
+        return self.nav.field(x, y).reshape(self._shape)[1:-1, 1:-1]
+
+    def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
+        moving = [r for r in range(self.num_robots) if r != robot and self._end(r) > now]
+        agents = [robot, *moving]
+        agent_legs = [legs] + [[g for g in self.legs[r] if g.time is not None and g.time > now]
+                               for r in moving]  # fmt: skip
+        blocked = np.zeros_like(self._grid_free)
+        for r in range(self.num_robots):
+            if r not in agents:
+                x, y = self._xy(self.timeline[r][-1])
+                blocked[y, x] = True
+        starts = np.array([self._xy(self._at(r, now)) for r in agents], dtype=np.int64)
+        goals = [np.array([self._xy(g.cell) for g in gl], dtype=np.int64) for gl in agent_legs]
+        try:
+            sol = cbs_solve(self._grid_free, blocked, starts, goals, self._heuristic,
+                            self._deadline())  # fmt: skip
+        except PlanningTimeout as exc:
+            raise self._timeout(exc, agents, now) from None
+        if sol is None:
+            return False
+        for r, gl, path, times in zip(agents, agent_legs, sol.paths, sol.goal_times, strict=True):
+            cells = self.nav._padded_index(path).tolist()
+            self._commit(r, now, cells, gl, [now + int(t) for t in times])
+            self._refresh(r, now)
+        return True
+
+    def _at(self, robot: int, t: int) -> int:
+        line = self.timeline[robot]
+        return line[min(t, len(line) - 1)]
