@@ -16,14 +16,11 @@ from omegaconf import DictConfig, OmegaConf
 from tqdm import tqdm
 
 from rtaw_marl.cli import CONF_DIR
-from rtaw_marl.cli.common import exit_on_user_error, sim_from_cfg
+from rtaw_marl.cli.common import exit_on_user_error, policies_from_cfg, sim_from_cfg
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
-from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
-from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.core import WarehouseSim
 
 
 @exit_on_user_error
@@ -37,7 +34,7 @@ def run(cfg: DictConfig) -> dict:
         raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
     sim = sim_from_cfg(cfg)
     print(f"layout {sim.layout.describe()}")
-    policies = _policies(cfg, names, sim)
+    policies = policies_from_cfg(cfg, names, sim)
     total = len(policies) * len(seeds) * sim.config.num_tasks
     with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:
         results = evaluate(sim, policies, seeds, on_decisions=bar.update)
@@ -59,41 +56,6 @@ def run(cfg: DictConfig) -> dict:
     path = write_json_atomic(output, payload)
     print(f"results: {path}")
     return payload
-
-
-def _policies(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
-    """Baselines by name; ``checkpoint`` expands to one greedy policy per checkpoint path,
-    ``rtaw`` to one per shipped pretrained policy named by ``pretrained``."""
-    sources = {"checkpoint": _as_list(cfg.checkpoint), "rtaw": _as_list(cfg.pretrained)}
-    for option, key in (("checkpoint", "checkpoint"), ("rtaw", "pretrained")):
-        if option in names and not sources[option]:
-            raise ConfigError(f"policy={option} needs {key}=... (one value or a list)")
-        if sources[option] and option not in names:
-            raise ConfigError(f"{key}=... given but policy does not include '{option}'")
-    policies: dict[str, SimPolicy] = {}
-    for name in names:
-        if name not in sources:
-            policies[name] = make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale)
-            continue
-        import torch
-
-        from rtaw_marl.policies.checkpoint import load_policy
-        from rtaw_marl.pretrained.registry import pretrained_path
-
-        torch.set_num_threads(int(cfg.torch_threads))
-        for source in sources[name]:
-            if name == "checkpoint":
-                policy = load_policy(source)
-            else:
-                policy = load_policy(pretrained_path(source), name=f"rtaw:{source}")
-            policies[policy.name] = policy
-    return policies
-
-
-def _as_list(value: object) -> list[str]:
-    if value is None:
-        return []
-    return [str(value)] if isinstance(value, str) else [str(v) for v in value]
 
 
 @hydra.main(config_path=str(CONF_DIR), config_name="eval", version_base="1.3")

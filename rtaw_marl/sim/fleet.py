@@ -334,9 +334,17 @@ class CBSFleet(Fleet):
 
     def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
         moving = [r for r in range(self.num_robots) if r != robot and self._end(r) > now]
-        agents = [robot, *moving]
-        agent_legs = [legs] + [[g for g in self.legs[r] if g.time is not None and g.time > now]
-                               for r in moving]  # fmt: skip
+        waiting = [r for r in self.deferred() if r != robot and r not in moving]
+        # Deferred robots join the search when they can: CBS may find room for all.
+        return (bool(waiting) and self._solve(robot, now, legs, moving + waiting)) or self._solve(
+            robot, now, legs, moving
+        )
+
+    def _solve(self, robot: int, now: int, legs: list[Leg], others: list[int]) -> bool:
+        agents = [robot, *others]
+        agent_legs = [legs] + [
+            [g for g in self.legs[r] if g.time is None or g.time > now] for r in others
+        ]
         blocked = np.zeros_like(self._grid_free)
         for r in range(self.num_robots):
             if r not in agents:

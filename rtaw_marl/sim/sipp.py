@@ -93,7 +93,7 @@ def sipp_plan(
         if k == last and cell == final and end == INF:
             return _reconstruct(key, best, parent, goals, t0)
         pops += 1
-        if pops % 512 == 0 and time.perf_counter() > deadline:
+        if (pops & 511) == 1 and time.perf_counter() > deadline:
             raise PlanningTimeout(f"SIPP ran past its time limit after {pops} expansions")
         field = fields[k]
         for off in offsets:

@@ -1,0 +1,75 @@
+"""``rtaw-render``: play one episode and save it as an animated GIF.
+
+The episode runs with a collision-aware navigator (``sipp`` by default, or ``cbs``), is
+checked by the independent conflict checker, then drawn: robots moving along their
+paths, queued tasks, tasks on their way to pickup, carried tasks and their destinations.
+
+Examples::
+
+    rtaw-render layout=A policy=rtaw pretrained=A_astar_m10 output=episode.gif
+    rtaw-render navigator=cbs env.num_tasks=20 every=2 fps=12
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig
+
+from rtaw_marl.cli import CONF_DIR
+from rtaw_marl.cli.common import exit_on_user_error, policies_from_cfg, sim_from_cfg
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation.evaluate import run_episode
+from rtaw_marl.evaluation.render import render_gif
+from rtaw_marl.sim.conflicts import check_schedule
+
+
+@exit_on_user_error
+def run(cfg: DictConfig) -> Path:
+    """Play ``cfg.policy`` on seed ``cfg.seed``, check the schedule, write the GIF."""
+    if not isinstance(cfg.policy, str):
+        raise ConfigError(f"policy must name one policy, got {cfg.policy}")
+    if isinstance(cfg.seed, bool) or not isinstance(cfg.seed, int):
+        raise ConfigError(f"seed must be an integer, got {cfg.seed!r}")
+    sim = sim_from_cfg(cfg)
+    if sim.navigator.make_fleet(1) is None:
+        raise ConfigError(
+            f"navigator={sim.navigator.name} moves robots independently (they pass through "
+            "each other); render with navigator=sipp or navigator=cbs"
+        )
+    (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
+    metrics = run_episode(sim, policy, int(cfg.seed))
+    schedule = sim.schedule()
+    check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
+    output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif"
+    title = f"{name} | {sim.navigator.name} | {sim.layout.name} | seed {cfg.seed}"
+    path = render_gif(
+        sim.layout,
+        schedule,
+        output,
+        fps=int(cfg.fps),
+        cell_px=cfg.cell_px,
+        start=int(cfg.start),
+        stop=cfg.stop,
+        every=int(cfg.every),
+        max_frames=int(cfg.max_frames),
+        title=title,
+    )
+    print(
+        f"{name}: TTD {metrics.ttd:.0f} s, makespan {metrics.makespan:.0f} s, "
+        f"{len(schedule.tasks)} tasks, {schedule.horizon + 1} time steps, schedule checked"
+    )
+    print(f"gif: {path}")
+    return path
+
+
+@hydra.main(config_path=str(CONF_DIR), config_name="render", version_base="1.3")
+def main(cfg: DictConfig) -> None:
+    """Console entry point."""
+    run(cfg)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,204 @@
+"""Collision-aware episodes (``sipp``, ``cbs``): every schedule passes the conflict checker.
+
+Hand-made corridors, swaps and bottlenecks with known answers, blocked goals, deadlocks
+and time limits, then hypothesis episodes on random small layouts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rtaw_marl.errors import ConfigError, PlanningError, PlanningTimeout
+from rtaw_marl.evaluation.evaluate import run_episode
+from rtaw_marl.policies import make_baseline
+from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.layout import Layout, open_grid
+from rtaw_marl.sim.registry import build_sim, make_navigator
+from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.tasks import FixedTasks
+
+PLANNERS = ["sipp", "cbs"]
+
+
+def grid(*rows: str) -> Layout:
+    """A layout from ASCII rows ('.' free, '@' blocked)."""
+    return Layout(np.array([[c == "@" for c in row] for row in rows]))
+
+
+def play(
+    layout: Layout,
+    navigator: str | dict,
+    starts: list[tuple[int, int]],
+    tasks: list[tuple[int, int, int, int]],
+    actions: list[int] | None = None,
+    queue_len: int = 1,
+    **env: object,
+) -> tuple[WarehouseSim, Schedule]:
+    """Serve ``tasks`` (first queued first, or by ``actions``); check the executed schedule."""
+    config = SimConfig(
+        num_robots=len(starts), num_tasks=len(tasks), queue_len=queue_len, noise_mean=0.0,
+        noise_var=0.0, robot_starts=tuple(starts), **env,
+    )  # fmt: skip
+    sim = WarehouseSim(config, layout, make_navigator(navigator, layout), FixedTasks(tasks))
+    sim.reset(0)
+    for i in range(len(tasks)):
+        sim.step(actions[i] if actions else int(np.flatnonzero(sim.queue_mask)[0]))
+    assert sim.done
+    schedule = sim.schedule()
+    check_schedule(layout, schedule, expected_tasks=len(tasks))
+    return sim, schedule
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_single_robot_times_are_shortest_paths(nav: str) -> None:
+    """Alone on the grid a robot's TTD and completion are the A* distances."""
+    layout = grid("......", "..@@..", "......")
+    sim, schedule = play(layout, nav, [(0, 0)], [(5, 2, 0, 2), (2, 0, 5, 0)])
+    # (0,0) -> (5,2): 7; -> (0,2): 5; then (0,2) -> (2,0): 4; -> (5,0): 3.
+    assert schedule.task_ttd.tolist() == [7, 4]
+    assert schedule.task_delivered.tolist() == [12, 19]
+    assert sim.metrics().ttd == 11.0
+    assert sim.metrics().makespan == 19.0
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_swap_through_a_pocket(nav: str) -> None:
+    """Two robots swap the ends of a corridor with a one-cell pocket above x = 3.
+
+    Robot 0 (x=0) goes to x=6 and robot 1 (x=6) to x=0, 6 steps each alone. The one
+    that dodges reaches the pocket at t=4 at the earliest, so the other passes x=3 at
+    t=4 (delivered at 7) and the dodger comes back (8): 15 is optimal.
+    """
+    layout = grid("@@@.@@@", ".......")
+    tasks = [(0, 1, 6, 1), (6, 1, 0, 1)]  # origins are the robots' own cells
+    _, schedule = play(layout, nav, [(0, 1), (6, 1)], tasks, queue_len=2)
+    assert schedule.task_ttd.tolist() == [0, 0]
+    assert sorted(schedule.task_delivered.tolist()) == [7, 8]
+    assert (schedule.positions == (3, 0)).all(axis=-1).any()
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_bottleneck_door_one_at_a_time(nav: str) -> None:
+    """Two rooms joined by a one-cell door: the robots pass it one after the other."""
+    layout = grid("...@...", ".......", "...@...")
+    # Both robots must cross the door (3, 1) from left to right.
+    starts = [(2, 0), (2, 2)]
+    tasks = [(4, 0, 6, 0), (4, 2, 6, 2)]
+    _, schedule = play(layout, nav, starts, tasks, queue_len=2)
+    door_times = [
+        t for t in range(schedule.horizon + 1) for m in range(2)
+        if tuple(schedule.positions[t, m]) == (3, 1)
+    ]  # fmt: skip
+    assert len(door_times) == len(set(door_times)) == 2
+    # Alone each pickup takes 4 steps; sharing the door delays one robot by exactly 1.
+    assert sorted(schedule.task_ttd.tolist()) == [4, 5]
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_idle_robot_on_the_goal_is_moved_aside(nav: str) -> None:
+    """The last task's destination is where an idle robot stands: it steps aside."""
+    layout = open_grid(5, 3)
+    sim, schedule = play(layout, nav, [(0, 1), (4, 1)], [(1, 1, 4, 1)])
+    assert sim._fleet.evacuations >= 1
+    assert tuple(schedule.positions[-1, 0]) == (4, 1)
+    assert tuple(schedule.positions[-1, 1]) != (4, 1)
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_robot_waits_for_the_holder_of_its_goal(nav: str) -> None:
+    """Mid-episode a goal held by a robot that will leave: the planner waits, no error.
+
+    Robot 1 stands on task 0's destination; it gets task 1 right after (same time)
+    and leaves, so robot 0 plans once robot 1 has moved, still at t=0: no delay.
+    """
+    layout = open_grid(6, 3)
+    tasks = [(0, 0, 5, 1), (5, 1, 5, 0)]
+    sim, schedule = play(layout, nav, [(0, 0), (5, 1)], tasks, queue_len=2)
+    assert sim._fleet.planning_calls > 2  # robot 0 could not plan at first
+    assert schedule.task_delivered.tolist() == [6, 1]
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_unsolvable_corridor_raises_a_clear_error(nav: str) -> None:
+    """An idle robot in a dead-end corridor on the only route: PlanningError, no hang."""
+    layout = open_grid(5, 1)
+    with pytest.raises(PlanningError, match=r"deadlocked.*robot 0 .*task 0"):
+        play(layout, nav, [(0, 0), (2, 0)], [(0, 0, 4, 0)])
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_time_limit_error_names_the_setting(nav: str) -> None:
+    """A planning call past navigator.time_limit stops the episode with PlanningTimeout."""
+    with pytest.raises(PlanningTimeout, match=r"navigator.time_limit=1e-09"):
+        play(open_grid(20, 20), {"name": nav, "time_limit": 1e-9}, [(0, 0)], [(19, 19, 0, 0)])
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_config_errors(nav: str) -> None:
+    """Completion noise, fractional start times and a bad time limit are refused."""
+    layout = open_grid(4, 4)
+    tasks = FixedTasks([(0, 0, 1, 1)])
+    with pytest.raises(ConfigError, match=r"env.noise_mean=0 env.noise_var=0"):
+        WarehouseSim(SimConfig(num_robots=1, num_tasks=1), layout,
+                     make_navigator(nav, layout), tasks)  # fmt: skip
+    config = SimConfig(num_robots=1, num_tasks=1, noise_mean=0, noise_var=0,
+                       robot_free_times=(0.5,))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"whole-second env.robot_free_times"):
+        WarehouseSim(config, layout, make_navigator(nav, layout), tasks)
+    with pytest.raises(ConfigError, match=r"navigator.time_limit must be a positive"):
+        make_navigator({"name": nav, "time_limit": 0}, layout)
+    with pytest.raises(ConfigError, match=r"unknown parameters \['timelimit'\]"):
+        make_navigator({"name": nav, "timelimit": 3}, layout)
+    sim = build_sim({"num_robots": 1, "num_tasks": 1}, layout, "astar", tasks)
+    with pytest.raises(ConfigError, match="use navigator=sipp or navigator=cbs"):
+        sim.schedule()
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> None:
+    """A 60x60 MPDM episode: checker passes, same seed same schedule, TTDs add up."""
+    env = {"num_robots": 10, "num_tasks": 40, "noise_mean": 0.0, "noise_var": 0.0}
+    runs = []
+    for _ in range(2):
+        sim = build_sim(env, {"name": "preset", "preset": "C"}, nav, "designated")
+        run_episode(sim, make_baseline("mpdm"), seed=3)
+        schedule = sim.schedule()
+        check_schedule(sim.layout, schedule, expected_tasks=40)
+        runs.append((sim, schedule))
+    (sim, a), (_, b) = runs
+    np.testing.assert_array_equal(a.positions, b.positions)
+    assert sim.metrics().ttd == pytest.approx(float(a.task_ttd.sum()))
+    assert sim.metrics().makespan == pytest.approx(float(a.task_delivered.max()))
+    # Waits only ever add to the single-robot distances.
+    astar = make_navigator("astar", sim.layout)
+    starts = a.positions[a.task_assigned, a.task_robot]
+    assert (a.task_ttd >= astar.distance(starts, a.tasks[:, :2])).all()
+
+
+@st.composite
+def scenarios(draw: st.DrawFn) -> tuple[Layout, list, list]:
+    """A small random layout (one connected region), robots on distinct cells, tasks."""
+    w, h = draw(st.integers(5, 8)), draw(st.integers(4, 7))
+    rng = np.random.default_rng(draw(st.integers(0, 2**31)))
+    obstacles = rng.random((h, w)) < draw(st.floats(0.0, 0.2))
+    layout = Layout(obstacles) if not obstacles.all() else open_grid(w, h)
+    cells = layout.main_cells
+    m = draw(st.integers(1, min(4, len(cells) // 4)))
+    starts = [tuple(c) for c in cells[rng.choice(len(cells), m, replace=False)].tolist()]
+    k = draw(st.integers(1, 8))
+    picks = rng.integers(0, len(cells), size=(k, 2))
+    tasks = [(*cells[o].tolist(), *cells[d].tolist()) for o, d in picks]
+    return layout, starts, tasks
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+@settings(max_examples=40, deadline=None, database=None)
+@given(scenario=scenarios())
+def test_random_small_layouts_complete_without_conflicts(nav: str, scenario: tuple) -> None:
+    """Any small connected layout with room to spare: every task is delivered, no conflict."""
+    layout, starts, tasks = scenario
+    play(layout, nav, starts, tasks, queue_len=2)
