@@ -5,6 +5,7 @@ Usage::
     python experiments/paper_tables.py table1    # Table I: 500 tasks, M = 10/100, Direct, A-E
     python experiments/paper_tables.py table2    # Table II: 5,000 tasks, M = 500/1000
     python experiments/paper_tables.py transfer  # cross-layout transfer of pretrained policies
+    python experiments/paper_tables.py navigators  # SIPP and CBS (the paper's transfer table)
 
 Each command evaluates on seeds 0-4 (the pretrained policies were trained and selected on
 other seeds), prints a markdown table, and replaces its section of docs/results.md
@@ -154,6 +155,43 @@ def transfer() -> str:
     return "\n".join(lines)
 
 
+#: The paper's SIPP/CBS table (MPDM, RBTS, RTAW means; 10 robots, 50 tasks).
+PAPER_NAVIGATORS = {
+    ("sipp", "A"): (692, 725, 645), ("sipp", "B"): (616, 636, 566), ("sipp", "C"): (684, 707, 626),
+    ("sipp", "D"): (710, 706, 642), ("sipp", "E"): (643, 689, 595),
+    ("cbs", "A"): (644, 696, 615), ("cbs", "B"): (680, 675, 619), ("cbs", "C"): (655, 670, 625),
+    ("cbs", "D"): (766, 817, 738), ("cbs", "E"): (618, 671, 591),
+}  # fmt: skip
+
+
+def navigators() -> str:
+    """10 robots, 50 designated tasks on layouts A-E, executed by SIPP and CBS (and A*).
+
+    RTAW is each layout's A*-trained policy; no completion noise (the collision-aware
+    navigators time tasks in whole seconds), drain mode: all 50 tasks are delivered.
+    """
+    header = (
+        "| layout | navigator | MPDM | RBTS | RTAW | RTAW vs MPDM (%) | RTAW vs RBTS (%) | "
+        "paper MPDM / RBTS / RTAW |"
+    )
+    lines = [header, "|" + "---|" * (header.count("|") - 1)]
+    env = {"num_robots": 10, "num_tasks": 50, "queue_len": 10, "noise_mean": 0.0, "noise_var": 0.0}
+    for p in "ABCDE":
+        for nav in ("astar", "sipp", "cbs"):
+            layout = {"name": "preset", "preset": p, "width": 60, "height": 60}
+            sim = build_sim(env, layout, nav, "designated")
+            res = evaluate(sim, _policies(sim, f"{p}_astar_m10"), SEEDS)
+            ttd = {k: v["ttd"] for k, v in res.items()}
+            paper = PAPER_NAVIGATORS.get((nav, p))
+            lines.append(
+                f"| {p} | {nav} | {_ms(ttd['MPDM'])} | {_ms(ttd['RBTS'])} | {_ms(ttd['RTAW'])} "
+                f"| {_imp(ttd['MPDM'], ttd['RTAW'])} | {_imp(ttd['RBTS'], ttd['RTAW'])} "
+                f"| {' / '.join(map(str, paper)) if paper else '-'} |"
+            )
+            print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 def plot_table1(data: dict, path: Path) -> None:
     """Bar chart: mean TTD per policy per row with std error bars."""
     import matplotlib
@@ -192,7 +230,7 @@ def replace_section(name: str, body: str) -> None:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("table", choices=["table1", "table2", "transfer"])
+    parser.add_argument("table", choices=["table1", "table2", "transfer", "navigators"])
     args = parser.parse_args()
     if args.table == "table1":
         paper, data = table1("paper")
@@ -202,6 +240,8 @@ def main() -> int:
         replace_section("table1_drain", drain)
     elif args.table == "table2":
         replace_section("table2", table2())
+    elif args.table == "navigators":
+        replace_section("navigators", navigators())
     else:
         replace_section("transfer", transfer())
     return 0
