@@ -23,7 +23,11 @@ that still cannot move raises :class:`~rtaw_marl.errors.PlanningError`, never ha
 Strategies: :class:`SIPPFleet` (prioritized planning: each newly assigned robot plans
 around all earlier trajectories, which never change) and :class:`CBSFleet`
 (Conflict-Based Search over every moving robot at each assignment: trajectories are
-re-planned jointly from the current time, the past never changes).
+re-planned jointly from the current time, the past never changes). CBS is exponential
+in the number of conflicts and narrow aisles make some joint problems very hard, so a
+CBS call has a budget of high-level nodes; past it (or when no joint plan exists) the
+new robot plans alone around the others' current paths, as SIPP would, and
+:attr:`CBSFleet.fallbacks` counts how often.
 """
 
 from __future__ import annotations
@@ -89,6 +93,10 @@ class Fleet:
         self.closing = False
         self.planning_calls = 0
         self.evacuations = 0
+        # Deferred robot -> held cells that blocked its last search (SIPP), and the
+        # deferred robots to retry because one of those cells was released since.
+        self._blockers: dict[int, set[int]] = {}
+        self._dirty: set[int] = set()
 
     def assign(self, robot: int, now: int, task: int, origin: tuple[int, int],
                destination: tuple[int, int]) -> None:  # fmt: skip
@@ -121,7 +129,7 @@ class Fleet:
         while self.deferred():
             later = max(now, max(len(t) - 1 for t in self.timeline))
             before = sum(len(t) for t in self.timeline), len(self.deferred())
-            self._retry(later)
+            self._retry(later, force=True)
             if (sum(len(t) for t in self.timeline), len(self.deferred())) == before:
                 raise PlanningError(self._blocked_message(later))
             if not self.closing:
@@ -138,27 +146,44 @@ class Fleet:
         return np.stack([flat % self._wp - 1, flat // self._wp - 1], axis=-1).astype(np.int64)
 
     # ------------------------------------------------------------------ planning
-    def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
-        """Plan ``robot`` through ``legs`` (and commit) or return False."""
+    def _plan(
+        self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
+    ) -> bool:
+        """Plan ``robot`` through ``legs`` (and commit) or return False.
+
+        ``blockers`` receives the held cells that made the plan fail, when known.
+        """
         raise NotImplementedError
 
     def _serve(self, robot: int, now: int) -> bool:
         pending = self._pending(robot)
         tries = [pending] if len(pending) == 1 or not self._partial else [pending, pending[:1]]
+        blockers: set[int] = set()
+        self._blockers.pop(robot, None)
+        self._dirty.discard(robot)
         for attempt in range(2):
-            if any(self._plan(robot, now, legs) for legs in tries):
+            if any(self._plan(robot, now, legs, blockers) for legs in tries):
                 self._refresh(robot, now)
                 return True
             if attempt == 0 and not self._evacuate_for(robot, now):
                 break
+        if self._partial:
+            self._blockers[robot] = blockers
         self._refresh(robot, now)
         return False
 
-    def _retry(self, now: int) -> None:
+    def _retry(self, now: int, force: bool = False) -> None:
+        """Re-plan deferred robots until none makes progress.
+
+        Without ``force``, a SIPP robot is retried only once a cell that blocked its last
+        search has been released: nothing else can turn a failed search into a success.
+        """
         progress = True
         while progress:
             progress = False
             for robot in self.deferred():
+                if not force and robot in self._blockers and robot not in self._dirty:
+                    continue
                 if self._end(robot) <= now or self._partial:
                     progress |= self._serve(robot, now)
 
@@ -218,6 +243,34 @@ class Fleet:
                     if nxt not in avoid:
                         found.append(nxt)
         return found
+
+    def _plan_around(
+        self,
+        table: ReservationTable,
+        robot: int,
+        t0: int,
+        legs: list[Leg],
+        blockers: set[int] | None = None,
+    ) -> bool:
+        """SIPP for ``robot`` from its cell at ``t0`` around the reservations of ``table``."""
+        start = self.timeline[robot][-1] if t0 >= self._end(robot) else self.timeline[robot][t0]
+        goals = [leg.cell for leg in legs]
+        fields = [self.nav.field(*self._xy(g)) for g in goals]
+        table.release_from(robot, t0)
+        try:
+            found = sipp_plan(table, self._free, self._wp, start, t0, goals, fields,
+                              self._deadline(), blockers)  # fmt: skip
+        except PlanningTimeout as exc:
+            raise self._timeout(exc, [robot], t0) from None
+        if found is None:
+            table.reserve(robot, t0, [start])
+            return False
+        cells, times = found
+        table.reserve(robot, t0, cells)
+        self._commit(robot, t0, cells, legs, times)
+        # The robot's old cell is no longer held forever: wake the robots it blocked.
+        self._dirty.update(r for r, held in self._blockers.items() if start in held)
+        return True
 
     # ------------------------------------------------------------------ bookkeeping
     _partial = False
@@ -299,24 +352,10 @@ class SIPPFleet(Fleet):
         for robot, line in enumerate(self.timeline):
             self.table.reserve(robot, 0, line)
 
-    def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
-        t0 = max(now, self._end(robot))
-        start = self.timeline[robot][-1]
-        goals = [leg.cell for leg in legs]
-        fields = [self.nav.field(*self._xy(g)) for g in goals]
-        self.table.release_from(robot, t0)
-        try:
-            found = sipp_plan(self.table, self._free, self._wp, start, t0, goals, fields,
-                              self._deadline())  # fmt: skip
-        except PlanningTimeout as exc:
-            raise self._timeout(exc, [robot], t0) from None
-        if found is None:
-            self.table.reserve(robot, t0, [start])
-            return False
-        cells, times = found
-        self.table.reserve(robot, t0, cells)
-        self._commit(robot, t0, cells, legs, times)
-        return True
+    def _plan(
+        self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
+    ) -> bool:
+        return self._plan_around(self.table, robot, max(now, self._end(robot)), legs, blockers)
 
 
 class CBSFleet(Fleet):
@@ -324,21 +363,44 @@ class CBSFleet(Fleet):
 
     name = "cbs"
 
-    def __init__(self, navigator: AStarNavigator, num_robots: int, time_limit: float) -> None:
+    def __init__(
+        self, navigator: AStarNavigator, num_robots: int, time_limit: float, max_nodes: int
+    ) -> None:
         super().__init__(navigator, num_robots, time_limit)
+        self.max_nodes = max_nodes
         self._grid_free = ~navigator.layout.obstacles
         self._shape = (navigator.layout.height + 2, navigator.layout.width + 2)
+
+    def reset(self, starts: np.ndarray, free_at: np.ndarray, num_tasks: int) -> None:
+        super().reset(starts, free_at, num_tasks)
+        self.cbs_calls = 0
+        self.fallbacks = 0
 
     def _heuristic(self, x: int, y: int) -> np.ndarray:
         return self.nav.field(x, y).reshape(self._shape)[1:-1, 1:-1]
 
-    def _plan(self, robot: int, now: int, legs: list[Leg]) -> bool:
+    def _plan(
+        self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
+    ) -> bool:
+        del blockers  # CBS re-plans others too: any commit may unblock a robot
         moving = [r for r in range(self.num_robots) if r != robot and self._end(r) > now]
         waiting = [r for r in self.deferred() if r != robot and r not in moving]
         # Deferred robots join the search when they can: CBS may find room for all.
-        return (bool(waiting) and self._solve(robot, now, legs, moving + waiting)) or self._solve(
-            robot, now, legs, moving
-        )
+        if waiting and self._solve(robot, now, legs, moving + waiting):
+            return True
+        if self._solve(robot, now, legs, moving):
+            return True
+        # No joint plan within the node budget (or none exists with everyone holding
+        # their goals): plan this robot alone around the others' current paths.
+        table = ReservationTable(self.num_robots)
+        for r in range(self.num_robots):
+            if r != robot:
+                line = self.timeline[r]
+                table.reserve(r, now, line[min(now, len(line) - 1) :])
+        if self._plan_around(table, robot, now, legs):
+            self.fallbacks += 1
+            return True
+        return False
 
     def _solve(self, robot: int, now: int, legs: list[Leg], others: list[int]) -> bool:
         agents = [robot, *others]
@@ -353,8 +415,9 @@ class CBSFleet(Fleet):
         starts = np.array([self._xy(self._at(r, now)) for r in agents], dtype=np.int64)
         goals = [np.array([self._xy(g.cell) for g in gl], dtype=np.int64) for gl in agent_legs]
         try:
+            self.cbs_calls += 1
             sol = cbs_solve(self._grid_free, blocked, starts, goals, self._heuristic,
-                            self._deadline())  # fmt: skip
+                            self._deadline(), max_nodes=self.max_nodes)  # fmt: skip
         except PlanningTimeout as exc:
             raise self._timeout(exc, agents, now) from None
         if sol is None:

@@ -14,7 +14,8 @@ a task's TTD is the real arrival time at its origin, waits included.
     Conflict-Based Search over all moving robots, re-planned from the current time
     whenever a robot gets a new task (full re-planning, not windowed: trajectories are
     short, so a whole-path solution costs little and is conflict-free as executed,
-    without extra re-planning events).
+    without extra re-planning events). A call that needs more than ``max_nodes``
+    high-level nodes falls back to planning the new robot alone around the others.
 
 Completion times come from the planned paths and are whole seconds, so the
 simulator's completion noise must be zero (``env.noise_mean=0 env.noise_var=0``; the
@@ -42,7 +43,6 @@ class SIPPNavigator(AStarNavigator):
     """
 
     name = "sipp"
-    _fleet_class: type[Fleet] = SIPPFleet
 
     def __init__(self, layout: Layout, time_limit: float = 10.0, cache_mb: float = 256.0) -> None:
         super().__init__(layout, cache_mb=cache_mb)
@@ -53,7 +53,7 @@ class SIPPNavigator(AStarNavigator):
         self.time_limit = float(time_limit)
 
     def make_fleet(self, num_robots: int) -> Fleet:
-        return self._fleet_class(self, num_robots, self.time_limit)
+        return SIPPFleet(self, num_robots, self.time_limit)
 
 
 class CBSNavigator(SIPPNavigator):
@@ -61,9 +61,25 @@ class CBSNavigator(SIPPNavigator):
 
     Args:
         layout: The grid.
-        time_limit: Seconds one CBS call may take.
+        time_limit: Seconds one planning call may take.
+        max_nodes: High-level CBS nodes per call; past it the newly assigned robot plans
+            alone around the others' paths (counted in ``Fleet.fallbacks``).
         cache_mb: Memory budget of the distance-field cache.
     """
 
     name = "cbs"
-    _fleet_class = CBSFleet
+
+    def __init__(
+        self,
+        layout: Layout,
+        time_limit: float = 10.0,
+        max_nodes: int = 200,
+        cache_mb: float = 256.0,
+    ) -> None:
+        super().__init__(layout, time_limit=time_limit, cache_mb=cache_mb)
+        if isinstance(max_nodes, bool) or not isinstance(max_nodes, int) or max_nodes < 1:
+            raise ConfigError(f"navigator.max_nodes must be a positive integer, got {max_nodes!r}")
+        self.max_nodes = max_nodes
+
+    def make_fleet(self, num_robots: int) -> Fleet:
+        return CBSFleet(self, num_robots, self.time_limit, self.max_nodes)

@@ -57,6 +57,14 @@ class ReservationTable:
             return self._robots[cell][-1]
         return -1
 
+    def parked(self, t: int) -> list[int]:
+        """Cells held forever by a robot that stands there since time ``t`` or earlier."""
+        return [
+            cell
+            for cell, ends in self._ends.items()
+            if ends and ends[-1] == INF and self._starts[cell][-1] <= t
+        ]
+
     def safe_intervals(self, cell: int) -> list[tuple[int, int]]:
         """Maximal free intervals ``[(a, b), ...]`` of ``cell`` over ``[0, INF]``, sorted."""
         safe = self._safe.get(cell)

@@ -26,6 +26,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from rtaw_marl.errors import PlanningTimeout
+from rtaw_marl.sim._bfs import bfs_fields
 from rtaw_marl.sim.reservations import INF, ReservationTable
 
 __all__ = ["sipp_plan"]
@@ -40,6 +41,7 @@ def sipp_plan(
     goals: Sequence[int],
     fields: Sequence[np.ndarray],
     deadline: float,
+    blockers: set[int] | None = None,
 ) -> tuple[list[int], list[int]] | None:
     """Earliest-arrival path from ``start`` at ``t0`` through ``goals`` in order.
 
@@ -53,6 +55,9 @@ def sipp_plan(
         goals: Flat goal cells, at least one; the robot holds the last one afterwards.
         fields: Per goal, the single-robot distance field ``int32 [cells]`` to it.
         deadline: ``time.perf_counter()`` value after which the search gives up.
+        blockers: When given and no path exists, receives the cells held forever by
+            other robots next to the explored region: only releasing one of them can
+            make a later search succeed (new reservations only shrink safe intervals).
 
     Returns:
         ``(cells, goal_times)``: the cell at each time ``t0, t0 + 1, ...`` up to the
@@ -63,7 +68,22 @@ def sipp_plan(
     """
     last = len(goals) - 1
     final = goals[last]
-    if table.holder(final) >= 0 or any(int(f[start]) < 0 for f in fields):
+    if any(int(f[start]) < 0 for f in fields):
+        return None
+    if table.holder(final) >= 0:
+        if blockers is not None:
+            blockers.add(final)
+        return None
+    earliest = t0
+    for k, goal in enumerate(goals[:last]):
+        # A goal held forever from some time on must be reached before.
+        earliest += int(fields[k][start if k == 0 else goals[k - 1]])
+        safe = table.safe_intervals(goal)
+        if table.holder(goal) >= 0 and (not safe or earliest > safe[-1][1]):
+            if blockers is not None:
+                blockers.add(goal)
+            return None
+    if _walled_in(table, free, width, start, t0, goals, blockers):
         return None
     # rest[k]: distance still to cover after reaching goal k.
     rest = [0] * len(goals)
@@ -120,7 +140,47 @@ def sipp_plan(
                     parent[nkey] = key
                     h = int(fields[k2][nxt]) + rest[k2]
                     heapq.heappush(heap, (arrive + h, -arrive, nxt, j, k2))
+    if blockers is not None:
+        explored = {cell for cell, _, _ in best}
+        blockers.update(
+            nxt
+            for cell in explored
+            for nxt in (cell + off for off in offsets)
+            if free[nxt] and table.holder(nxt) >= 0
+        )
     return None
+
+
+def _walled_in(
+    table: ReservationTable,
+    free: Sequence[bool],
+    width: int,
+    start: int,
+    t0: int,
+    goals: Sequence[int],
+    blockers: set[int] | None,
+) -> bool:
+    """Whether robots parked since ``t0`` or earlier cut ``start`` off from a goal.
+
+    Parked robots never move during this search, so they are walls: one flood fill
+    answers what a full SIPP search would find out slowly.
+    """
+    parked = table.parked(t0)
+    if not parked:
+        return False
+    grid = np.asarray(free, dtype=np.bool_)
+    grid[parked] = False
+    grid[start] = True
+    reach = np.empty((1, grid.size), dtype=np.int32)
+    bfs_fields(grid, width, np.array([start], dtype=np.int64), reach)
+    if all(reach[0, g] >= 0 for g in goals):
+        return False
+    if blockers is not None:
+        inside = np.flatnonzero(reach[0] >= 0)
+        around = np.concatenate([inside + 1, inside - 1, inside + width, inside - width])
+        cells = np.asarray(parked)
+        blockers.update(cells[np.isin(cells, around)].tolist())
+    return True
 
 
 def _swaps(table: ReservationTable, cell: int, nxt: int, arrive: int) -> bool:

@@ -69,7 +69,7 @@ def test_free_grid_path_is_the_shortest_path() -> None:
     p = Planner(open_grid(6, 5))
     path, times = p.plan((0, 0), [(5, 0), (5, 4)])
     assert times == [5, 9]
-    assert path[0] == (0, 0) and path[5] == (5, 0) and path[-1] == (5, 4)
+    assert (path[0], path[5], path[-1]) == ((0, 0), (5, 0), (5, 4))
     assert len(path) == 10
 
 
@@ -116,7 +116,8 @@ def test_goal_held_by_another_robot_fails_fast() -> None:
     q = Planner(open_grid(4, 4))
     q.reserve(1, 0, [(3, 0)] * 3 + [(3, 1), (3, 2), (3, 3)])  # at (3, 3) from t = 5
     path, times = q.plan((0, 3), [(3, 3), (0, 0)])
-    assert path[times[0]] == (3, 3) and times[0] == 3 and times[1] == 9
+    assert times == [3, 9]
+    assert path[3] == (3, 3)
 
 
 def test_waits_for_a_robot_that_crosses_the_goal() -> None:
