@@ -51,9 +51,7 @@ def sim_from_cfg(cfg: DictConfig) -> WarehouseSim:
     return build_sim(env, layout, navigator, tasks)
 
 
-def policies_from_cfg(
-    cfg: DictConfig, names: list[str], sim: WarehouseSim
-) -> dict[str, SimPolicy]:
+def policies_from_cfg(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
     """Policies by name: baselines, ``checkpoint`` (one greedy policy per path in
     ``cfg.checkpoint``) and ``rtaw`` (one per shipped policy named in ``cfg.pretrained``)."""
     sources = {"checkpoint": _as_list(cfg.checkpoint), "rtaw": _as_list(cfg.pretrained)}
