@@ -115,6 +115,9 @@ def _cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
         (["policy=[nope]"], "unknown policy 'nope'; available: mpdm, random, rbts"),
         (["tasks=file"], "tasks.path"),
         (["tasks=file", "tasks.path=missing.csv"], "task file not found"),
+        (["navigator=sipp", "env.noise_var=0.25"], "set env.noise_mean=0 env.noise_var=0"),
+        (["navigator=cbs", "navigator.max_nodes=0"], "navigator.max_nodes must be a positive"),
+        (["navigator=sipp", "+navigator.window=5"], "unknown parameters ['window']"),
     ],
 )
 def test_cli_errors_are_one_line(args: list[str], message: str, tmp_path: Path) -> None:
@@ -127,10 +130,10 @@ def test_cli_errors_are_one_line(args: list[str], message: str, tmp_path: Path) 
 
 def test_cli_unknown_group_option_lists_available(tmp_path: Path) -> None:
     """An unknown navigator is rejected by Hydra with the available options."""
-    proc = _cli(["navigator=cbs"], tmp_path)
+    proc = _cli(["navigator=dijkstra"], tmp_path)
     assert proc.returncode != 0
-    assert "astar" in proc.stderr
-    assert "direct" in proc.stderr
+    for name in ("astar", "cbs", "direct", "sipp"):
+        assert name in proc.stderr
     assert "Traceback" not in proc.stderr
 
 
