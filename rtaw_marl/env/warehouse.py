@@ -69,8 +69,11 @@ holds the episode metrics (`ttd`, `makespan`, ...).
 noise_var=0.25, reward="ttd", robot_starts=None, robot_free_times=None,
 layout="shelves", navigator="astar", tasks="designated", render_mode=None`.
 `layout` and `tasks` take a name, a `{"name": ..., **params}` mapping or an object
-(`Layout`, `TaskStream`); `layout` also takes a file path. `render_mode="ansi"`
-returns the grid as text.
+(`Layout`, `TaskStream`); `layout` also takes a file path. `navigator` is `"direct"`,
+`"astar"`, or a collision-aware `"sipp"` / `"cbs"` (or `{"name": "cbs", "time_limit":
+5}`): robots then occupy cells and wait for each other, the reward is the TTD planned
+at the decision and the episode metrics count the executed waits; these need
+`noise_mean=0, noise_var=0`. `render_mode="ansi"` returns the grid as text.
 
 ## Version History
 
@@ -128,7 +131,7 @@ class raw_env(AECEnv):
         robot_starts: Sequence[Sequence[int]] | None = None,
         robot_free_times: Sequence[float] | None = None,
         layout: str | Mapping[str, Any] | Layout = "shelves",
-        navigator: str = "astar",
+        navigator: str | Mapping[str, Any] = "astar",
         tasks: str | Mapping[str, Any] | TaskStream = "designated",
         render_mode: str | None = None,
     ) -> None:

@@ -23,6 +23,7 @@ import rtaw_marl
 from rtaw_marl import warehouse_v0
 from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS
+from rtaw_marl.sim.conflicts import check_schedule
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 MAPS_DIR = REPO_ROOT.parent / "shared" / "maps"
@@ -154,6 +155,24 @@ def test_pettingzoo_api_test(
         and not issubclass(w.category, DeprecationWarning)
     ]
     assert unexpected == []
+
+
+@pytest.mark.parametrize("navigator", ["sipp", "cbs"])
+def test_collision_aware_env_passes_api_test_and_reports_executed_ttd(navigator: str) -> None:
+    """With SIPP/CBS the env is a normal AEC env; its episode TTD is the executed one."""
+    kwargs = {"num_robots": 10, "num_tasks": 30, "noise_mean": 0.0, "noise_var": 0.0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        api_test(warehouse_v0.env(navigator=navigator, **kwargs), num_cycles=31)
+    env = warehouse_v0.env(navigator=navigator, **kwargs)
+    env.reset(seed=1)
+    for _ in env.agent_iter():
+        obs, _, terminated, truncated, info = env.last()
+        env.step(None if terminated or truncated else int(obs["action_mask"].argmax()))
+    schedule = env.unwrapped.sim.schedule()
+    check_schedule(env.unwrapped.sim.layout, schedule, expected_tasks=30)
+    assert info["episode"]["ttd"] == pytest.approx(float(schedule.task_ttd.sum()))
+    assert len(schedule.tasks) == 30
 
 
 @pytest.mark.parametrize(
