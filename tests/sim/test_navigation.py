@@ -230,12 +230,14 @@ def test_unreachable_pairs_raise() -> None:
 
 
 def test_make_navigator() -> None:
-    """make_navigator builds the named class; an unknown name lists 'astar' and 'direct'."""
+    """make_navigator builds the named class; an unknown name lists the registered ones."""
     layout = open_grid(4, 4)
     assert isinstance(make_navigator("astar", layout), AStarNavigator)
     assert isinstance(make_navigator("direct", layout), DirectNavigator)
     assert make_navigator("direct", layout).layout is layout
-    with pytest.raises(ConfigError, match=r"unknown navigator 'dijkstra'.*astar, direct"):
+    with pytest.raises(
+        ConfigError, match=r"unknown navigator 'dijkstra'.*astar, cbs, direct, sipp"
+    ):
         make_navigator("dijkstra", layout)
 
 
