@@ -6,6 +6,7 @@ Usage::
     python experiments/paper_tables.py table2    # Table II: 5,000 tasks, M = 500/1000
     python experiments/paper_tables.py transfer  # cross-layout transfer of pretrained policies
     python experiments/paper_tables.py navigators  # SIPP and CBS (the paper's transfer table)
+    python experiments/paper_tables.py navigators --seeds 20  # the same on seeds 0-19
 
 Each command evaluates on seeds 0-4 (the pretrained policies were trained and selected on
 other seeds), prints a markdown table, and replaces its section of docs/results.md
@@ -164,11 +165,12 @@ PAPER_NAVIGATORS = {
 }  # fmt: skip
 
 
-def navigators() -> str:
+def navigators(seeds: list[int]) -> str:
     """10 robots, 50 designated tasks on layouts A-E, executed by SIPP and CBS (and A*).
 
     RTAW is each layout's A*-trained policy; no completion noise (the collision-aware
     navigators time tasks in whole seconds), drain mode: all 50 tasks are delivered.
+    The last rows pool every layout's per-seed improvements (mean ± standard error).
     """
     header = (
         "| layout | navigator | MPDM | RBTS | RTAW | RTAW vs MPDM (%) | RTAW vs RBTS (%) | "
@@ -176,12 +178,16 @@ def navigators() -> str:
     )
     lines = [header, "|" + "---|" * (header.count("|") - 1)]
     env = {"num_robots": 10, "num_tasks": 50, "queue_len": 10, "noise_mean": 0.0, "noise_var": 0.0}
+    pooled: dict[str, dict[str, list[float]]] = {}
     for p in "ABCDE":
         for nav in ("astar", "sipp", "cbs"):
             layout = {"name": "preset", "preset": p, "width": 60, "height": 60}
             sim = build_sim(env, layout, nav, "designated")
-            res = evaluate(sim, _policies(sim, f"{p}_astar_m10"), SEEDS)
-            ttd = {k: v["ttd"] for k, v in res.items()}
+            res = evaluate(sim, _policies(sim, f"{p}_astar_m10"), seeds)
+            ttd = {k: np.asarray(v["ttd"]) for k, v in res.items()}
+            for base in ("MPDM", "RBTS"):
+                imp = 100 * (ttd[base] - ttd["RTAW"]) / ttd[base]
+                pooled.setdefault(nav, {}).setdefault(base, []).extend(imp.tolist())
             paper = PAPER_NAVIGATORS.get((nav, p))
             lines.append(
                 f"| {p} | {nav} | {_ms(ttd['MPDM'])} | {_ms(ttd['RBTS'])} | {_ms(ttd['RTAW'])} "
@@ -189,6 +195,12 @@ def navigators() -> str:
                 f"| {' / '.join(map(str, paper)) if paper else '-'} |"
             )
             print(lines[-1], flush=True)
+    for nav, imps in pooled.items():
+        cells = []
+        for base in ("MPDM", "RBTS"):
+            arr = np.asarray(imps[base])
+            cells.append(f"{arr.mean():+.1f} ± {arr.std(ddof=1) / np.sqrt(len(arr)):.1f} (SE)")
+        lines.append(f"| all | {nav} | | | | {cells[0]} | {cells[1]} | |")
     return "\n".join(lines)
 
 
@@ -231,6 +243,9 @@ def replace_section(name: str, body: str) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("table", choices=["table1", "table2", "transfer", "navigators"])
+    parser.add_argument(
+        "--seeds", type=int, default=len(SEEDS), help="navigators: evaluate on seeds 0..N-1"
+    )
     args = parser.parse_args()
     if args.table == "table1":
         paper, data = table1("paper")
@@ -241,7 +256,9 @@ def main() -> int:
     elif args.table == "table2":
         replace_section("table2", table2())
     elif args.table == "navigators":
-        replace_section("navigators", navigators())
+        seeds = list(range(args.seeds))
+        name = "navigators" if seeds == SEEDS else f"navigators_{len(seeds)}"
+        replace_section(name, navigators(seeds))
     else:
         replace_section("transfer", transfer())
     return 0

@@ -15,9 +15,15 @@ from hypothesis import strategies as st
 
 from rtaw_marl.errors import PlanningTimeout
 from rtaw_marl.sim.cbs import CBSSolution, cbs_solve
+from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.schedule import Schedule
 
 FAST = settings(max_examples=30, deadline=None, database=None)
 MOVES = ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))
+TASK_FIELDS = (
+    "task_robot", "task_arrival", "task_assigned", "task_pickup", "task_delivered",
+)  # fmt: skip
 
 
 def grid(*rows: str) -> np.ndarray:
@@ -115,6 +121,15 @@ def check_solution(
         swap = (pos[i, :-1] == pos[j, 1:]).all(axis=1) & (pos[i, 1:] == pos[j, :-1]).all(axis=1)
         moved = (pos[i, :-1] != pos[i, 1:]).any(axis=1)
         assert not (swap & moved).any(), f"edge conflict {i}-{j}"
+    # The package's independent conflict checker agrees (parked robots as extra robots).
+    parked = np.argwhere(blocked)[:, ::-1]
+    still = np.broadcast_to(parked, (horizon, len(parked), 2))
+    schedule = Schedule(
+        positions=np.concatenate([pos.transpose(1, 0, 2), still], axis=1).astype(np.int64),
+        **{f: np.zeros(0, dtype=np.int64) for f in TASK_FIELDS},
+        tasks=np.zeros((0, 4), dtype=np.int64),
+    )
+    check_schedule(Layout(~free), schedule)
     return costs
 
 

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from rtaw_marl.errors import PlanningTimeout
+from rtaw_marl.sim.conflicts import check_schedule
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.navigation import AStarNavigator
 from rtaw_marl.sim.reservations import INF, ReservationTable
+from rtaw_marl.sim.schedule import Schedule
 from rtaw_marl.sim.sipp import sipp_plan
 
 #: A one-cell pocket above x = 3 of a 7-cell corridor (y = 1).
@@ -85,10 +87,13 @@ def test_waits_in_the_pocket_for_an_oncoming_robot() -> None:
     assert times == [7]
     assert (3, 0) in path
     other = [(max(6 - t, 0), 1) for t in range(len(path))]
-    for t in range(len(path)):
-        assert path[t] != other[t]
-        if t:
-            assert (path[t - 1], path[t]) != (other[t], other[t - 1])
+    empty = np.zeros(0, dtype=np.int64)
+    schedule = Schedule(
+        positions=np.array([path, other], dtype=np.int64).transpose(1, 0, 2),
+        tasks=np.zeros((0, 4), dtype=np.int64), task_robot=empty, task_arrival=empty,
+        task_assigned=empty, task_pickup=empty, task_delivered=empty,
+    )  # fmt: skip
+    check_schedule(POCKET, schedule)
 
 
 def test_no_swap_in_a_corridor_without_room() -> None:
