@@ -158,6 +158,10 @@ def _conflicts(paths: list[list[int]]) -> tuple[int, list[_Conflict]]:
     return count, [c for _, c in out]
 
 
+class _OutOfBudget(Exception):
+    """The low-level expansion budget of one CBS call is spent."""
+
+
 def _low_level(
     agent: _Agent,
     cons: _Constraints,
@@ -165,6 +169,7 @@ def _low_level(
     neighbours: Callable[[int], list[int]],
     n: int,
     deadline: float,
+    budget: list[int],
 ) -> tuple[list[int], list[int]] | None:
     """Space-time A* for one agent under its constraints.
 
@@ -175,12 +180,14 @@ def _low_level(
         neighbours: Cell -> traversable cells reachable in one step, itself included.
         n: Number of grid cells.
         deadline: ``time.perf_counter()`` value past which to give up.
+        budget: ``[expansions left]`` for the whole CBS call, decremented here.
 
     Returns:
         ``(path, goal_times)`` in flat cells, or ``None`` when no path exists.
 
     Raises:
         PlanningTimeout: The deadline passed (re-raised by the caller with context).
+        _OutOfBudget: The call's expansion budget is spent.
     """
     vcons, econs, after = cons.vertex, cons.edge, cons.after
     goals, hrows = agent.goals, agent.h
@@ -213,6 +220,8 @@ def _low_level(
             k = num_goals
         return k
 
+    if budget[0] < 0:
+        raise _OutOfBudget
     k0 = advance(agent.start, 0, 0)
     h0 = 0 if k0 == num_goals else hrows[k0][agent.start]
     best: dict[int, int] = {k0 * n + agent.start: 0}  # time 0, no conflicts
@@ -229,10 +238,15 @@ def _low_level(
         best[key] = -1
         nodes.append((c, k, parent))
         if k == num_goals:
+            budget[0] -= expansions % _CHECK_EVERY
             return _reconstruct(nodes, num_goals)
         expansions += 1
-        if expansions % _CHECK_EVERY == 0 and time.perf_counter() > deadline:
-            raise PlanningTimeout("low-level search ran past its time limit")
+        if expansions % _CHECK_EVERY == 0:
+            if time.perf_counter() > deadline:
+                raise PlanningTimeout("low-level search ran past its time limit")
+            budget[0] -= _CHECK_EVERY
+            if budget[0] < 0:
+                raise _OutOfBudget
         me = len(nodes) - 1
         t1 = t + 1
         base_v = t1 * n
@@ -257,6 +271,7 @@ def _low_level(
             best[key2] = val
             f2 = t1 if k2 == num_goals else t1 + hrows[k2][c2]
             heapq.heappush(heap, (f2 if f2 > fmin else fmin, conf2, -t1, c2, k2, me))
+    budget[0] -= expansions % _CHECK_EVERY
     return None
 
 
@@ -288,6 +303,7 @@ def cbs_solve(
     heuristic: Callable[[int, int], np.ndarray],
     deadline: float,
     max_nodes: int | None = None,
+    max_expansions: int | None = None,
 ) -> CBSSolution | None:
     """Plan conflict-free paths minimising the sum of arrival times at the last goals.
 
@@ -301,16 +317,34 @@ def cbs_solve(
         deadline: ``time.perf_counter()`` value past which to give up.
         max_nodes: High-level nodes to expand at most; past it the search gives up and
             returns ``None`` (a deterministic budget, unlike the deadline).
+        max_expansions: Low-level A* expansions over the whole call at most (counted in
+            steps of a few hundred); past it the search gives up and returns ``None``.
 
     Returns:
         An optimal :class:`CBSSolution`, or ``None`` when the instance is infeasible
         (a start or goal not traversable, a goal unreachable, two agents sharing a
         start or a final goal, or no plan found once the constraint tree is exhausted)
-        or ``max_nodes`` nodes were expanded without a solution.
+        or a budget (``max_nodes``, ``max_expansions``) was spent without a solution.
 
     Raises:
         PlanningTimeout: The search ran past ``deadline``.
     """
+    try:
+        return _cbs(free, blocked, starts, goals, heuristic, deadline, max_nodes, max_expansions)
+    except _OutOfBudget:
+        return None
+
+
+def _cbs(
+    free: np.ndarray,
+    blocked: np.ndarray,
+    starts: np.ndarray,
+    goals: Sequence[np.ndarray],
+    heuristic: Callable[[int, int], np.ndarray],
+    deadline: float,
+    max_nodes: int | None,
+    max_expansions: int | None,
+) -> CBSSolution | None:
     height, width = free.shape
     n = height * width
     ok = (np.asarray(free, dtype=bool) & ~np.asarray(blocked, dtype=bool)).ravel().tolist()
@@ -353,12 +387,14 @@ def cbs_solve(
         return out
 
     expanded = 0
+    budget = [max_expansions if max_expansions is not None else 1 << 62]
 
     def plan(
         i: int, cons: _Constraints, paths: list[list[int]]
     ) -> tuple[list[int], list[int]] | None:
+        others = paths[:i] + paths[i + 1 :]
         try:
-            return _low_level(agents[i], cons, paths[:i] + paths[i + 1 :], neighbours, n, deadline)
+            return _low_level(agents[i], cons, others, neighbours, n, deadline, budget)
         except PlanningTimeout:
             raise PlanningTimeout(
                 f"CBS ran past its time limit after {expanded} high-level nodes"

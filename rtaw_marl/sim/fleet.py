@@ -25,9 +25,9 @@ around all earlier trajectories, which never change) and :class:`CBSFleet`
 (Conflict-Based Search over every moving robot at each assignment: trajectories are
 re-planned jointly from the current time, the past never changes). CBS is exponential
 in the number of conflicts and narrow aisles make some joint problems very hard, so a
-CBS call has a budget of high-level nodes; past it (or when no joint plan exists) the
-new robot plans alone around the others' current paths, as SIPP would, and
-:attr:`CBSFleet.fallbacks` counts how often.
+CBS call has a budget of high-level nodes (and of low-level expansions, 1000 per node);
+past it (or when no joint plan exists) the new robot plans alone around the others'
+current paths, as SIPP would, and :attr:`CBSFleet.fallbacks` counts how often.
 """
 
 from __future__ import annotations
@@ -47,6 +47,10 @@ from rtaw_marl.sim.sipp import sipp_plan
 __all__ = ["CBSFleet", "Fleet", "SIPPFleet"]
 
 PICKUP, DELIVER, PARK = 0, 1, 2
+#: Low-level A* expansions a CBS call may spend per high-level node of its budget: a
+#: few hard low-level searches (a goal cut off under many constraints) would otherwise
+#: exhaust the time limit within the node budget.
+EXPANSIONS_PER_NODE = 1000
 _KINDS = ("pickup", "delivery", "parking")
 
 
@@ -417,7 +421,8 @@ class CBSFleet(Fleet):
         try:
             self.cbs_calls += 1
             sol = cbs_solve(self._grid_free, blocked, starts, goals, self._heuristic,
-                            self._deadline(), max_nodes=self.max_nodes)  # fmt: skip
+                            self._deadline(), max_nodes=self.max_nodes,
+                            max_expansions=EXPANSIONS_PER_NODE * self.max_nodes)  # fmt: skip
         except PlanningTimeout as exc:
             raise self._timeout(exc, agents, now) from None
         if sol is None:

@@ -66,6 +66,7 @@ def solve(
     blocked: np.ndarray | None = None,
     budget: float = 5.0,
     max_nodes: int | None = None,
+    max_expansions: int | None = None,
 ) -> CBSSolution | None:
     """Run CBS on plain lists; ``blocked`` defaults to nothing blocked."""
     blocked = np.zeros_like(free) if blocked is None else blocked
@@ -77,6 +78,7 @@ def solve(
         heuristic_for(free),
         time.perf_counter() + budget,
         max_nodes=max_nodes,
+        max_expansions=max_expansions,
     )
 
 
@@ -251,6 +253,11 @@ def test_node_budget_gives_up_deterministically() -> None:
     sol = solve(pocket, [(0, 1), (3, 1)], [[(3, 1)], [(0, 1)]], max_nodes=50)
     assert sol is not None
     assert sol.expanded <= 50
+    # The low-level budget: each agent of this 60x60 crossing needs 118 expansions.
+    big = np.ones((60, 60), dtype=bool)
+    starts, goals = [(0, 0), (59, 0)], [[(59, 59)], [(0, 59)]]
+    assert solve(big, starts, goals, max_expansions=100) is None
+    assert solve(big, starts, goals, max_expansions=300) is not None
 
 
 def test_crossing_at_a_junction_makes_one_agent_wait() -> None:
