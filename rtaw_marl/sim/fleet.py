@@ -95,6 +95,7 @@ class Fleet:
         self.task_pickup = np.full(num_tasks, -1, dtype=np.int64)
         self.task_delivered = np.full(num_tasks, -1, dtype=np.int64)
         self.closing = False
+        self._budget = 2 * self.num_robots  # evacuations allowed per assignment
         self.planning_calls = 0
         self.evacuations = 0
         # Deferred robot -> held cells that blocked its last search (SIPP), and the
@@ -120,7 +121,7 @@ class Fleet:
         """
         self.closing = True
         self._budget = 4 * self.num_robots
-        self._retry(now)
+        self._retry(now, force=True)  # idle robots can be moved aside from now on
         if self.deferred():
             self.resolve(now)
 
