@@ -51,6 +51,8 @@ PICKUP, DELIVER, PARK = 0, 1, 2
 #: few hard low-level searches (a goal cut off under many constraints) would otherwise
 #: exhaust the time limit within the node budget.
 EXPANSIONS_PER_NODE = 1000
+#: High-level node budget of a CBS call (``navigator.max_nodes`` for ``cbs``).
+DEFAULT_MAX_NODES = 200
 _KINDS = ("pickup", "delivery", "parking")
 
 
@@ -81,6 +83,9 @@ class Fleet:
         self.time_limit = time_limit
         self._wp = navigator._wp
         self._free = navigator._free_padded.tolist()
+        self._grid_free = ~navigator.layout.obstacles
+        self._shape = (navigator.layout.height + 2, navigator.layout.width + 2)
+        self.max_nodes = DEFAULT_MAX_NODES
         self.free_at = np.zeros(num_robots, dtype=np.float64)
         self.estimated_free_at = np.zeros(num_robots, dtype=np.float64)
 
@@ -98,6 +103,7 @@ class Fleet:
         self._budget = 2 * self.num_robots  # evacuations allowed per assignment
         self.planning_calls = 0
         self.evacuations = 0
+        self.cbs_calls = 0
         # Deferred robot -> held cells that blocked its last search (SIPP), and the
         # deferred robots to retry because one of those cells was released since.
         self._blockers: dict[int, set[int]] = {}
@@ -135,7 +141,8 @@ class Fleet:
             later = max(now, max(len(t) - 1 for t in self.timeline))
             before = sum(len(t) for t in self.timeline), len(self.deferred())
             self._retry(later, force=True)
-            if (sum(len(t) for t in self.timeline), len(self.deferred())) == before:
+            stuck = (sum(len(t) for t in self.timeline), len(self.deferred())) == before
+            if stuck and not self._rescue(later):
                 raise PlanningError(self._blocked_message(later))
             if not self.closing:
                 return
@@ -151,6 +158,11 @@ class Fleet:
         return np.stack([flat % self._wp - 1, flat // self._wp - 1], axis=-1).astype(np.int64)
 
     # ------------------------------------------------------------------ planning
+    def _rescue(self, now: int) -> bool:
+        """Last resort before reporting a deadlock; True when some robot moved."""
+        del now
+        return False
+
     def _plan(
         self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
     ) -> bool:
@@ -193,10 +205,17 @@ class Fleet:
                     progress |= self._serve(robot, now)
 
     def _evacuate_for(self, robot: int, now: int) -> bool:
-        """Move robots that will not move by themselves off ``robot``'s route."""
+        """Move robots that will not move by themselves off ``robot``'s way.
+
+        First off one shortest route through its pending legs; if nobody on it can be
+        moved, off every shortest route (a robot trapped in a pocket on one route may
+        leave room on another).
+        """
+        return any(self._evacuate_from(robot, now, self._route(robot, wide)) for wide in (0, 1))
+
+    def _evacuate_from(self, robot: int, now: int, route: set[int]) -> bool:
         if self._budget <= 0:
             return False
-        route = self._route(robot)
         stuck = [
             k for k in range(self.num_robots)
             if k != robot and self._end(k) <= now and self.timeline[k][-1] in route
@@ -220,14 +239,23 @@ class Fleet:
                 self.legs[k].remove(leg)
         return moved
 
-    def _route(self, robot: int) -> set[int]:
-        """Cells of ``robot``'s single-robot shortest route through its pending legs."""
-        cells = {self.timeline[robot][-1]}
-        here = self._xy(self.timeline[robot][-1])
+    def _route(self, robot: int, wide: bool = False) -> set[int]:
+        """Cells of ``robot``'s single-robot shortest route through its pending legs.
+
+        With ``wide``, the cells of every shortest route: those whose distances from
+        and to the ends of a leg add up to its length.
+        """
+        here = self.timeline[robot][-1]
+        cells = {here}
         for leg in self._pending(robot):
-            there = self._xy(leg.cell)
-            cells.update(self.nav._padded_index(self.nav.path(here, there)).tolist())
-            here = there
+            a, b = self._xy(here), self._xy(leg.cell)
+            if wide:
+                da, db = self.nav.field(*a), self.nav.field(*b)
+                on = (da >= 0) & (da + db == da[leg.cell])
+                cells.update(np.flatnonzero(on).tolist())
+            else:
+                cells.update(self.nav._padded_index(self.nav.path(a, b)).tolist())
+            here = leg.cell
         return cells
 
     def _taken_cells(self) -> set[int]:
@@ -276,6 +304,37 @@ class Fleet:
         # The robot's old cell is no longer held forever: wake the robots it blocked.
         self._dirty.update(r for r, held in self._blockers.items() if start in held)
         return True
+
+    def _joint(self, agents: list[int], agent_legs: list[list[Leg]], now: int) -> bool:
+        """One CBS call: ``agents`` through their legs from ``now``, the rest standing still."""
+        blocked = np.zeros_like(self._grid_free)
+        for r in range(self.num_robots):
+            if r not in agents:
+                x, y = self._xy(self.timeline[r][-1])
+                blocked[y, x] = True
+        starts = np.array([self._xy(self._at(r, now)) for r in agents], dtype=np.int64)
+        goals = [np.array([self._xy(g.cell) for g in gl], dtype=np.int64) for gl in agent_legs]
+        try:
+            self.cbs_calls += 1
+            sol = cbs_solve(self._grid_free, blocked, starts, goals, self._heuristic,
+                            self._deadline(), max_nodes=self.max_nodes,
+                            max_expansions=EXPANSIONS_PER_NODE * self.max_nodes)  # fmt: skip
+        except PlanningTimeout as exc:
+            raise self._timeout(exc, agents, now) from None
+        if sol is None:
+            return False
+        for r, gl, path, times in zip(agents, agent_legs, sol.paths, sol.goal_times, strict=True):
+            cells = self.nav._padded_index(path).tolist()
+            self._commit(r, now, cells, gl, [now + int(t) for t in times])
+            self._refresh(r, now)
+        return True
+
+    def _heuristic(self, x: int, y: int) -> np.ndarray:
+        return self.nav.field(x, y).reshape(self._shape)[1:-1, 1:-1]
+
+    def _at(self, robot: int, t: int) -> int:
+        line = self.timeline[robot]
+        return line[min(t, len(line) - 1)]
 
     # ------------------------------------------------------------------ bookkeeping
     _partial = False
@@ -341,7 +400,7 @@ class Fleet:
         return (
             f"navigator {self.name}: the robots are deadlocked at t={now}: "
             + "; ".join(parts)
-            + " (robots hold their cells; the layout has no room to move them aside)"
+            + " (robots hold their cells and none of those in the way could be moved aside)"
         )
 
 
@@ -362,6 +421,43 @@ class SIPPFleet(Fleet):
     ) -> bool:
         return self._plan_around(self.table, robot, max(now, self._end(robot)), legs, blockers)
 
+    def _rescue(self, now: int) -> bool:
+        """Prioritized planning is stuck: plan the deferred robots jointly (one CBS call),
+        with the robots that stand in their way going to parking cells."""
+        deferred = [r for r in self.deferred() if self._end(r) <= now]
+        if not deferred:
+            return False
+        route = set().union(*(self._route(r, wide=True) for r in deferred))
+        taken = self._taken_cells()
+        agents, agent_legs = list(deferred), [self._pending(r) for r in deferred]
+        for k in range(self.num_robots):
+            here = self.timeline[k][-1]
+            idle = self.closing and not self._pending(k) and self._end(k) <= now
+            if k in deferred or here not in route or not idle:
+                continue
+            # Off every route if possible; otherwise CBS orders who passes first.
+            parking = self._parking_cells(here, taken | route, 1) or self._parking_cells(
+                here, taken, 1
+            )
+            if not parking:
+                return False
+            taken.add(parking[0])
+            agents.append(k)
+            agent_legs.append([Leg(parking[0], -1, PARK)])
+        for r in agents:
+            self.table.release_from(r, now)
+        if not self._joint(agents, agent_legs, now):
+            for r in agents:
+                self.table.reserve(r, now, [self.timeline[r][-1]])
+            return False
+        for r, gl in zip(agents, agent_legs, strict=True):
+            if gl[0].kind == PARK:
+                self.legs[r] += gl
+                self.evacuations += 1
+            self.table.reserve(r, now, self.timeline[r][now:])
+            self._refresh(r, now)
+        return True
+
 
 class CBSFleet(Fleet):
     """Conflict-Based Search, re-planned jointly over all moving robots at each assignment."""
@@ -373,16 +469,10 @@ class CBSFleet(Fleet):
     ) -> None:
         super().__init__(navigator, num_robots, time_limit)
         self.max_nodes = max_nodes
-        self._grid_free = ~navigator.layout.obstacles
-        self._shape = (navigator.layout.height + 2, navigator.layout.width + 2)
 
     def reset(self, starts: np.ndarray, free_at: np.ndarray, num_tasks: int) -> None:
         super().reset(starts, free_at, num_tasks)
-        self.cbs_calls = 0
         self.fallbacks = 0
-
-    def _heuristic(self, x: int, y: int) -> np.ndarray:
-        return self.nav.field(x, y).reshape(self._shape)[1:-1, 1:-1]
 
     def _plan(
         self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
@@ -408,32 +498,7 @@ class CBSFleet(Fleet):
         return False
 
     def _solve(self, robot: int, now: int, legs: list[Leg], others: list[int]) -> bool:
-        agents = [robot, *others]
         agent_legs = [legs] + [
             [g for g in self.legs[r] if g.time is None or g.time > now] for r in others
         ]
-        blocked = np.zeros_like(self._grid_free)
-        for r in range(self.num_robots):
-            if r not in agents:
-                x, y = self._xy(self.timeline[r][-1])
-                blocked[y, x] = True
-        starts = np.array([self._xy(self._at(r, now)) for r in agents], dtype=np.int64)
-        goals = [np.array([self._xy(g.cell) for g in gl], dtype=np.int64) for gl in agent_legs]
-        try:
-            self.cbs_calls += 1
-            sol = cbs_solve(self._grid_free, blocked, starts, goals, self._heuristic,
-                            self._deadline(), max_nodes=self.max_nodes,
-                            max_expansions=EXPANSIONS_PER_NODE * self.max_nodes)  # fmt: skip
-        except PlanningTimeout as exc:
-            raise self._timeout(exc, agents, now) from None
-        if sol is None:
-            return False
-        for r, gl, path, times in zip(agents, agent_legs, sol.paths, sol.goal_times, strict=True):
-            cells = self.nav._padded_index(path).tolist()
-            self._commit(r, now, cells, gl, [now + int(t) for t in times])
-            self._refresh(r, now)
-        return True
-
-    def _at(self, robot: int, t: int) -> int:
-        line = self.timeline[robot]
-        return line[min(t, len(line) - 1)]
+        return self._joint([robot, *others], agent_legs, now)

@@ -179,6 +179,30 @@ def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> No
     assert (a.task_ttd >= astar.distance(starts, a.tasks[:, :2])).all()
 
 
+#: Dense small cases that once deadlocked: two rooms joined by a one-cell corridor, and
+#: idle robots trapped in a pocket on the only ways to a goal (found by hypothesis).
+DENSE = [
+    (("....@", "..@..", "..@..", "..@.."), [(0, 3), (0, 1), (3, 3), (3, 0)],
+     [(0, 2, 3, 1), (4, 2, 1, 1), (4, 3, 3, 2), (0, 0, 4, 3)]),
+    (("....@...", ".....@..", ".....@@.", "........"), [(1, 3), (3, 0), (6, 0), (4, 2), (1, 0)],
+     [(3, 1, 0, 3), (6, 0, 5, 0), (6, 0, 4, 2), (7, 2, 6, 1), (7, 0, 1, 0), (4, 1, 7, 2),
+      (6, 1, 3, 1), (4, 3, 0, 1), (2, 0, 5, 0)]),
+    (("......", "......", "@...@@", ".@....", "......", "......"),
+     [(3, 5), (4, 1), (4, 5), (4, 3)],
+     [(3, 0, 5, 3), (3, 1, 5, 0), (5, 5, 5, 5), (3, 2, 0, 4), (3, 4, 1, 2), (1, 0, 4, 1),
+      (5, 3, 5, 0)]),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("nav", PLANNERS)
+@pytest.mark.parametrize("case", range(len(DENSE)))
+def test_dense_small_cases_complete(nav: str, case: int) -> None:
+    """Robots that block each other's only ways are moved aside; every task is delivered."""
+    rows, starts, tasks = DENSE[case]
+    sim, _ = play(grid(*rows), nav, starts, tasks, queue_len=2)
+    assert sim._fleet.evacuations >= 1
+
+
 @st.composite
 def scenarios(draw: st.DrawFn) -> tuple[Layout, list, list]:
     """A small random layout (one connected region), robots on distinct cells, tasks."""
@@ -196,7 +220,7 @@ def scenarios(draw: st.DrawFn) -> tuple[Layout, list, list]:
 
 
 @pytest.mark.parametrize("nav", PLANNERS)
-@settings(max_examples=40, deadline=None, database=None)
+@settings(max_examples=40, deadline=None, database=None, derandomize=True)
 @given(scenario=scenarios())
 def test_random_small_layouts_complete_without_conflicts(nav: str, scenario: tuple) -> None:
     """Any small connected layout with room to spare: every task is delivered, no conflict."""
