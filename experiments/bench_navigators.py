@@ -44,14 +44,15 @@ def episode(sim: WarehouseSim, seed: int) -> dict[str, float]:
     while not sim.done:
         sim.step(policy.act_sim(sim))
     seconds = time.perf_counter() - start
-    fleet = sim._fleet
-    if fleet is not None:
+    stats = {"planning_calls": 0.0, "evacuations": 0.0, "cbs_fallbacks": 0.0}
+    if sim.fleet is not None:
         check_schedule(sim.layout, sim.schedule(), expected_tasks=sim.config.num_tasks)
+        stats = sim.fleet.stats()
     return {
         "seconds": seconds,
-        "calls": fleet.planning_calls if fleet else 0,
-        "evacuations": fleet.evacuations if fleet else 0,
-        "fallbacks": getattr(fleet, "fallbacks", 0),
+        "calls": stats["planning_calls"],
+        "evacuations": stats["evacuations"],
+        "fallbacks": stats["cbs_fallbacks"],
         "ttd": sim.metrics().ttd,
     }
 

@@ -64,7 +64,9 @@ def evaluate(
 
     Returns:
         ``{policy: {metric: [one value per seed]}}`` with every :class:`EpisodeMetrics`
-        field plus ``wall_time_s`` (seconds per episode).
+        field plus ``wall_time_s`` (seconds per episode); with a collision-aware
+        navigator also the fleet's ``planning_calls``, ``evacuations`` (robots moved
+        out of another's way) and ``cbs_fallbacks`` per episode.
     """
     results: dict[str, dict[str, list[float]]] = {}
     for name, policy in policies.items():
@@ -76,5 +78,8 @@ def evaluate(
             for key, value in metrics.as_dict().items():
                 per_metric.setdefault(key, []).append(value)
             per_metric.setdefault("wall_time_s", []).append(elapsed)
+            if sim.fleet is not None:
+                for key, value in sim.fleet.stats().items():
+                    per_metric.setdefault(key, []).append(value)
         results[name] = per_metric
     return results

@@ -37,6 +37,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.sim.fleet import Fleet
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
 from rtaw_marl.sim.navigation import Navigator
@@ -460,6 +461,11 @@ class WarehouseSim:
             minlength=self.num_robots,
         )
         self.robot_free_at[:] = fleet.estimated_free_at
+
+    @property
+    def fleet(self) -> Fleet | None:
+        """The collision-aware executor (``sipp``, ``cbs``), or ``None``."""
+        return self._fleet
 
     def schedule(self) -> Schedule:
         """The executed episode: every robot's cell at every second and each task's times.

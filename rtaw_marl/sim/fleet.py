@@ -147,6 +147,14 @@ class Fleet:
             if not self.closing:
                 return
 
+    def stats(self) -> dict[str, float]:
+        """Counters of the episode: planning calls, evacuations, CBS fallbacks."""
+        return {
+            "planning_calls": float(self.planning_calls),
+            "evacuations": float(self.evacuations),
+            "cbs_fallbacks": float(getattr(self, "fallbacks", 0)),
+        }
+
     def deferred(self) -> list[int]:
         """Robots with legs not yet planned."""
         return [r for r in range(self.num_robots) if self._pending(r)]

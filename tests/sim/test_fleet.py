@@ -103,7 +103,7 @@ def test_idle_robot_on_the_goal_is_moved_aside(nav: str) -> None:
     """The last task's destination is where an idle robot stands: it steps aside."""
     layout = open_grid(5, 3)
     sim, schedule = play(layout, nav, [(0, 1), (4, 1)], [(1, 1, 4, 1)])
-    assert sim._fleet.evacuations >= 1
+    assert sim.fleet.evacuations >= 1
     assert tuple(schedule.positions[-1, 0]) == (4, 1)
     assert tuple(schedule.positions[-1, 1]) != (4, 1)
 
@@ -118,7 +118,7 @@ def test_robot_waits_for_the_holder_of_its_goal(nav: str) -> None:
     layout = open_grid(6, 3)
     tasks = [(0, 0, 5, 1), (5, 1, 5, 0)]
     sim, schedule = play(layout, nav, [(0, 0), (5, 1)], tasks, queue_len=2)
-    assert sim._fleet.planning_calls > 2  # robot 0 could not plan at first
+    assert sim.fleet.planning_calls > 2  # robot 0 could not plan at first
     assert schedule.task_delivered.tolist() == [6, 1]
 
 
@@ -171,6 +171,8 @@ def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> No
         runs.append((sim, schedule))
     (sim, a), (_, b) = runs
     np.testing.assert_array_equal(a.positions, b.positions)
+    assert set(sim.fleet.stats()) == {"planning_calls", "evacuations", "cbs_fallbacks"}
+    assert sim.fleet.stats()["planning_calls"] >= 40
     assert sim.metrics().ttd == pytest.approx(float(a.task_ttd.sum()))
     assert sim.metrics().makespan == pytest.approx(float(a.task_delivered.max()))
     # Waits only ever add to the single-robot distances.
@@ -200,7 +202,7 @@ def test_dense_small_cases_complete(nav: str, case: int) -> None:
     """Robots that block each other's only ways are moved aside; every task is delivered."""
     rows, starts, tasks = DENSE[case]
     sim, _ = play(grid(*rows), nav, starts, tasks, queue_len=2)
-    assert sim._fleet.evacuations >= 1
+    assert sim.fleet.evacuations >= 1
 
 
 @st.composite
