@@ -6,6 +6,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Protocol
 
+from rtaw_marl.sim.conflicts import check_schedule
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.metrics import EpisodeMetrics
 
@@ -67,6 +68,10 @@ def evaluate(
         field plus ``wall_time_s`` (seconds per episode); with a collision-aware
         navigator also the fleet's ``planning_calls``, ``evacuations`` (robots moved
         out of another's way) and ``cbs_fallbacks`` per episode.
+
+    Raises:
+        ScheduleError: A collision-aware episode's executed schedule breaks a rule
+            (a conflict, an illegal move, a task not served).
     """
     results: dict[str, dict[str, list[float]]] = {}
     for name, policy in policies.items():
@@ -79,6 +84,8 @@ def evaluate(
                 per_metric.setdefault(key, []).append(value)
             per_metric.setdefault("wall_time_s", []).append(elapsed)
             if sim.fleet is not None:
+                # Every collision-aware episode is validated on the checker's own code path.
+                check_schedule(sim.layout, sim.schedule(), expected_tasks=metrics.tasks_served)
                 for key, value in sim.fleet.stats().items():
                     per_metric.setdefault(key, []).append(value)
         results[name] = per_metric
