@@ -104,6 +104,7 @@ class Fleet:
         self.planning_calls = 0
         self.evacuations = 0
         self.cbs_calls = 0
+        self.fallbacks = 0  # CBS calls past their budget, planned by SIPP instead
         # Deferred robot -> held cells that blocked its last search (SIPP), and the
         # deferred robots to retry because one of those cells was released since.
         self._blockers: dict[int, set[int]] = {}
@@ -152,7 +153,7 @@ class Fleet:
         return {
             "planning_calls": float(self.planning_calls),
             "evacuations": float(self.evacuations),
-            "cbs_fallbacks": float(getattr(self, "fallbacks", 0)),
+            "cbs_fallbacks": float(self.fallbacks),
         }
 
     def deferred(self) -> list[int]:
@@ -477,10 +478,6 @@ class CBSFleet(Fleet):
     ) -> None:
         super().__init__(navigator, num_robots, time_limit)
         self.max_nodes = max_nodes
-
-    def reset(self, starts: np.ndarray, free_at: np.ndarray, num_tasks: int) -> None:
-        super().reset(starts, free_at, num_tasks)
-        self.fallbacks = 0
 
     def _plan(
         self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
