@@ -444,9 +444,10 @@ class WarehouseSim:
         ox, oy, dx, dy = self.queue_rows[slot].tolist()
         fleet.assign(robot, now, task, (ox, oy), (dx, dy))
         pickup, delivered = int(fleet.task_pickup[task]), int(fleet.task_delivered[task])
-        if pickup < 0:
-            return estimate - float(self.queue_length[slot]), now + estimate
-        return float(pickup - now), float(delivered if delivered >= 0 else pickup + estimate)
+        length = float(self.queue_length[slot])
+        if pickup < 0:  # waiting to plan: single-robot distances
+            return estimate - length, now + estimate
+        return float(pickup - now), float(delivered if delivered >= 0 else pickup + length)
 
     def _fleet_finish(self, now: float) -> None:
         """Deliver every assigned task, then record the executed times."""
