@@ -33,6 +33,7 @@ current paths, as SIPP would, and :attr:`CBSFleet.fallbacks` counts how often.
 from __future__ import annotations
 
 import time
+from abc import ABC, abstractmethod
 from collections import deque
 from dataclasses import dataclass
 
@@ -66,7 +67,7 @@ class Leg:
     time: int | None = None  # planned arrival; None while not planned
 
 
-class Fleet:
+class Fleet(ABC):
     """Collision-free execution of assigned tasks; subclasses choose the planner.
 
     Args:
@@ -109,6 +110,7 @@ class Fleet:
         # deferred robots to retry because one of those cells was released since.
         self._blockers: dict[int, set[int]] = {}
         self._dirty: set[int] = set()
+        self._waiting: set[int] = set()  # robots with unplanned legs (kept by _refresh)
 
     def assign(self, robot: int, now: int, task: int, origin: tuple[int, int],
                destination: tuple[int, int]) -> None:  # fmt: skip
@@ -157,8 +159,8 @@ class Fleet:
         }
 
     def deferred(self) -> list[int]:
-        """Robots with legs not yet planned."""
-        return [r for r in range(self.num_robots) if self._pending(r)]
+        """Robots with legs not yet planned, by id."""
+        return sorted(self._waiting)
 
     def positions(self) -> np.ndarray:
         """``int64 [T + 1, M, 2]`` cell ``(x, y)`` of every robot at every time."""
@@ -172,6 +174,7 @@ class Fleet:
         del now
         return False
 
+    @abstractmethod
     def _plan(
         self, robot: int, now: int, legs: list[Leg], blockers: set[int] | None = None
     ) -> bool:
@@ -179,7 +182,6 @@ class Fleet:
 
         ``blockers`` receives the held cells that made the plan fail, when known.
         """
-        raise NotImplementedError
 
     def _serve(self, robot: int, now: int) -> bool:
         pending = self._pending(robot)
@@ -384,6 +386,10 @@ class Fleet:
         pending = self._pending(robot)
         end = self._end(robot)
         last = next((g for g in reversed(self.legs[robot]) if g.kind != PARK), None)
+        if pending:
+            self._waiting.add(robot)
+        else:
+            self._waiting.discard(robot)
         if not pending:
             free = last.time if last is not None and last.time is not None else end
             self.free_at[robot] = self.estimated_free_at[robot] = max(free, 0)
