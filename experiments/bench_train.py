@@ -27,7 +27,7 @@ from hydra import compose, initialize_config_dir
 from torchrl.collectors import Collector, MultiSyncCollector
 
 from rtaw_marl.cli import CONF_DIR
-from rtaw_marl.envs import BatchedWarehouseEnv
+from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.models import RTAWActor, make_actor
 
 MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"

@@ -9,10 +9,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import rtaw_marl.env.warehouse as warehouse
+import rtaw_marl.envs.pettingzoo as warehouse
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "environment.md"
-HEADER = "<!-- Generated from rtaw_marl/env/warehouse.py by experiments/gen_env_doc.py -->\n\n"
+HEADER = "<!-- Generated from rtaw_marl/envs/pettingzoo.py by experiments/gen_env_doc.py -->\n\n"
 
 
 def render() -> str:

@@ -26,8 +26,8 @@ import numpy as np
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.policies.checkpoint import load_policy
-from rtaw_marl.pretrained.registry import pretrained_path
+from rtaw_marl.policies.network import load_policy
+from rtaw_marl.policies.pretrained.registry import pretrained_path
 from rtaw_marl.sim.registry import build_sim
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.policies.checkpoint import load_policy
+from rtaw_marl.policies.network import load_policy
 from rtaw_marl.sim.registry import build_sim
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

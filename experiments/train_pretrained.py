@@ -5,9 +5,9 @@ Usage::
     python experiments/train_pretrained.py                 # every entry of the registry
     python experiments/train_pretrained.py A_astar_m10     # selected entries
 
-Each entry of ``rtaw_marl/pretrained/registry.py`` names its ``rtaw-train`` overrides;
+Each entry of ``rtaw_marl/policies/pretrained/registry.py`` names its ``rtaw-train`` overrides;
 this script runs exactly that command, then writes the best checkpoint, without the
-optimizer state (a few KB), to ``rtaw_marl/pretrained/<name>.pt``. The checkpoint keeps
+optimizer state (a few KB), to ``rtaw_marl/policies/pretrained/<name>.pt``. The checkpoint keeps
 the command line that trained it.
 """
 
@@ -18,8 +18,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from rtaw_marl.pretrained.registry import PRETRAINED, train_command
-from rtaw_marl.training.checkpoint import load_checkpoint, save_checkpoint
+from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
+from rtaw_marl.policies.pretrained.registry import PRETRAINED, train_command
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,19 +1,28 @@
 """rtaw_marl: learned lifelong multi-robot task allocation in warehouses (RTAW).
 
-``from rtaw_marl import warehouse_v0`` gives the PettingZoo environment; importing the
-package also registers it as ``rtaw/warehouse-v0`` in PettingZoo's registry, so
-``pettingzoo.make("aec", "rtaw/warehouse-v0")`` works after ``import rtaw_marl``.
+``from rtaw_marl import warehouse_v0`` gives the PettingZoo environment. Importing the
+package loads neither torch nor PettingZoo; the env registers itself with PettingZoo as
+``rtaw/warehouse-v0`` when :mod:`rtaw_marl.envs.pettingzoo` is imported (``from
+rtaw_marl import warehouse_v0`` does that), and at once if PettingZoo is already loaded,
+so ``import pettingzoo, rtaw_marl; pettingzoo.make("aec", "rtaw/warehouse-v0")`` works.
 """
 
 from __future__ import annotations
 
-from pettingzoo.env_registry.registration import aec_registry, register
+import sys
 
-from rtaw_marl import warehouse_v0
-
-__all__ = ["ENV_ID", "__version__", "warehouse_v0"]
+__all__ = ["ENV_ID", "__version__", "register_envs"]
 __version__ = "0.1.0"
 ENV_ID = "rtaw/warehouse-v0"
 
-if ENV_ID not in aec_registry:
-    register("aec", ENV_ID, entry_point="rtaw_marl.env.warehouse:env")
+
+def register_envs() -> None:
+    """Register ``rtaw/warehouse-v0`` in PettingZoo's AEC registry (idempotent)."""
+    from pettingzoo.env_registry.registration import aec_registry, register
+
+    if ENV_ID not in aec_registry:
+        register("aec", ENV_ID, entry_point="rtaw_marl.envs.pettingzoo:env")
+
+
+if "pettingzoo" in sys.modules:
+    register_envs()

@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from rtaw_marl.env.warehouse import env, raw_env
+from rtaw_marl.envs.pettingzoo import env, raw_env
 
 __all__ = ["env", "raw_env"]

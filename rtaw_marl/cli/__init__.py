@@ -4,5 +4,5 @@ from __future__ import annotations
 
 from pathlib import Path
 
-#: The Hydra config folder (``conf/`` at the repository root).
-CONF_DIR = Path(__file__).resolve().parents[2] / "conf"
+#: The Hydra config folder (``rtaw_marl/conf/``, shipped in the package).
+CONF_DIR = Path(__file__).resolve().parents[1] / "conf"

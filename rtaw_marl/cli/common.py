@@ -67,8 +67,8 @@ def policies_from_cfg(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> d
             continue
         import torch
 
-        from rtaw_marl.policies.checkpoint import load_policy
-        from rtaw_marl.pretrained.registry import pretrained_path
+        from rtaw_marl.policies.network import load_policy
+        from rtaw_marl.policies.pretrained.registry import pretrained_path
 
         torch.set_num_threads(int(cfg.torch_threads))
         for source in sources[name]:

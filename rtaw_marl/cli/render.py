@@ -22,8 +22,8 @@ from rtaw_marl.cli import CONF_DIR
 from rtaw_marl.cli.common import exit_on_user_error, policies_from_cfg, sim_from_cfg
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import run_episode
-from rtaw_marl.evaluation.render import render_gif
 from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.viz.gif import render_gif
 
 
 @exit_on_user_error

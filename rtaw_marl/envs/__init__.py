@@ -1,7 +1,9 @@
-"""TorchRL environments (the batched native env)."""
+"""Environment adapters over the simulator.
 
-from __future__ import annotations
+* :mod:`rtaw_marl.envs.pettingzoo`: the PettingZoo AEC env (no torch);
+* :mod:`rtaw_marl.envs.torchrl`: the batched native TorchRL env used for training;
+* :mod:`rtaw_marl.envs.features`: the observation features both share;
+* :mod:`rtaw_marl.envs.text`: the text rendering of a simulator.
 
-from rtaw_marl.envs.batched import OBSERVATION_KEYS, BatchedWarehouseEnv
-
-__all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]
+Import the submodule you need: this package imports neither torch nor PettingZoo.
+"""

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from rtaw_marl.models.policy import SimNetworkPolicy, make_actor, make_critic
+from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic, RTAWEncoder
 
 __all__ = [
     "RTAWActor",
     "RTAWCritic",
     "RTAWEncoder",
-    "SimNetworkPolicy",
     "make_actor",
     "make_critic",
 ]

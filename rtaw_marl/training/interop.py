@@ -18,7 +18,7 @@ from tensordict.utils import NestedKey
 from torchrl.envs import PettingZooWrapper
 from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 
-from rtaw_marl.env.warehouse import env as warehouse_env
+from rtaw_marl.envs.pettingzoo import env as warehouse_env
 
 __all__ = ["BATCHED_KEYS", "INTEROP_KEYS", "TrainKeys", "acting_reward", "make_interop_env"]
 

@@ -23,14 +23,14 @@ from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from tqdm import tqdm
 
-from rtaw_marl.envs.batched import BatchedWarehouseEnv
+from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import evaluate
-from rtaw_marl.models.policy import make_actor, make_critic
+from rtaw_marl.models.actor_critic import make_actor, make_critic
+from rtaw_marl.models.checkpoint import build_networks, load_checkpoint, save_checkpoint
 from rtaw_marl.models.rtaw import RTAWActor
 from rtaw_marl.policies import MPDM
 from rtaw_marl.sim.registry import build_sim
-from rtaw_marl.training.checkpoint import build_networks, load_checkpoint, save_checkpoint
 from rtaw_marl.training.interop import (
     BATCHED_KEYS,
     INTEROP_KEYS,
@@ -38,7 +38,8 @@ from rtaw_marl.training.interop import (
     acting_reward,
     make_interop_env,
 )
-from rtaw_marl.training.logging import RunLogger, plot_training_curve
+from rtaw_marl.training.logging import RunLogger
+from rtaw_marl.viz.plots import plot_training_curve
 
 __all__ = ["TrainResult", "greedy_ttd", "train"]
 

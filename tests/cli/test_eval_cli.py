@@ -155,7 +155,7 @@ def test_cli_multirun_writes_one_result_per_job(tmp_path: Path) -> None:
 )
 def test_every_training_option_composes(group: str, option: str) -> None:
     """Each model/algo option composes into the rtaw-train config and builds networks."""
-    from rtaw_marl.training.checkpoint import build_networks
+    from rtaw_marl.models.checkpoint import build_networks
 
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         cfg = compose(config_name="train", overrides=[f"{group}={option}"])

@@ -6,10 +6,10 @@ import pytest
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate
-from rtaw_marl.policies.checkpoint import load_policy
-from rtaw_marl.pretrained.registry import PRETRAINED, pretrained_path
+from rtaw_marl.models.checkpoint import load_checkpoint
+from rtaw_marl.policies.network import load_policy
+from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.registry import build_sim
-from rtaw_marl.training.checkpoint import load_checkpoint
 
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import torch
 
-from rtaw_marl.envs import BatchedWarehouseEnv
-from rtaw_marl.policies.checkpoint import load_policy
+from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
+from rtaw_marl.models.checkpoint import build_networks, load_checkpoint
+from rtaw_marl.policies.network import load_policy
 from rtaw_marl.sim.registry import build_sim
-from rtaw_marl.training.checkpoint import build_networks, load_checkpoint
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 import torch
 
-from rtaw_marl.envs import BatchedWarehouseEnv
+from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.training.checkpoint import (
+from rtaw_marl.models.checkpoint import (
     FEATURES,
     build_networks,
     load_checkpoint,

@@ -28,9 +28,9 @@ import torch
 import torchrl
 
 import rtaw_marl
+from rtaw_marl.envs.features import ROBOT_FEATURES, TASK_FEATURES
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
-from rtaw_marl.sim.features import ROBOT_FEATURES, TASK_FEATURES
 from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = [

@@ -1,17 +1,14 @@
-"""TorchRL wrappers of the RTAW network, and a policy that drives the bare simulator."""
+"""TorchRL actor and critic modules around the RTAW networks, on explicit keys."""
 
 from __future__ import annotations
 
-import numpy as np
-import torch
 from tensordict.nn import TensorDictModule
 from torchrl.modules import MaskedCategorical, ProbabilisticActor, ValueOperator
 
+from rtaw_marl.envs.features import OBSERVATION_KEYS
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
-from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.features import OBSERVATION_KEYS, robot_features, task_features
 
-__all__ = ["OBSERVATION_KEYS", "SimNetworkPolicy", "make_actor", "make_critic"]
+__all__ = ["OBSERVATION_KEYS", "make_actor", "make_critic"]
 
 
 def make_actor(net: RTAWActor, keys: tuple = OBSERVATION_KEYS) -> ProbabilisticActor:
@@ -46,36 +43,3 @@ def make_critic(net: RTAWCritic, keys: tuple = OBSERVATION_KEYS) -> ValueOperato
     prefix = keys[3][:-1] if isinstance(keys[3], tuple) else ()
     out = (*prefix, "state_value") if prefix else "state_value"
     return ValueOperator(net, in_keys=list(keys), out_keys=[out])
-
-
-class SimNetworkPolicy:
-    """Greedy (argmax) RTAW decisions on a bare simulator, for evaluation.
-
-    Args:
-        net: A trained policy network.
-        name: Label used in result tables.
-    """
-
-    def __init__(self, net: RTAWActor, name: str = "rtaw") -> None:
-        self.net = net.eval()
-        self.name = name
-
-    def reset(self, seed: int | None = None) -> None:
-        """Nothing to seed: greedy decisions are deterministic."""
-
-    @torch.no_grad()
-    def act_sim(self, sim: WarehouseSim) -> int:
-        """The slot with the largest logit among the non-empty ones."""
-        scale = sim.layout.scale
-        robots = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, scale)
-        tasks = task_features(
-            sim.queue_rows, sim.queue_length, sim.robot_distances(), sim.queue_mask, scale
-        )
-        mask = torch.from_numpy(sim.queue_mask.copy())
-        logits = self.net(
-            torch.from_numpy(robots),
-            torch.from_numpy(tasks),
-            torch.from_numpy(np.ascontiguousarray(robots[sim.robot])),
-            mask,
-        )
-        return int(torch.where(mask, logits, -torch.inf).argmax())

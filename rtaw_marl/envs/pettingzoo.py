@@ -90,9 +90,10 @@ from gymnasium import spaces
 from pettingzoo import AECEnv
 from pettingzoo.utils import wrappers
 
-from rtaw_marl.env.render import render_ansi
+from rtaw_marl import register_envs
+from rtaw_marl.envs.features import robot_features, task_features
+from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
-from rtaw_marl.sim.features import robot_features, task_features
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.registry import build_sim
@@ -289,3 +290,6 @@ class raw_env(AECEnv):
 
     def close(self) -> None:
         pass
+
+
+register_envs()

@@ -10,7 +10,7 @@ from torchrl.collectors import Collector
 from torchrl.envs.utils import check_env_specs
 
 from rtaw_marl import warehouse_v0
-from rtaw_marl.envs import BatchedWarehouseEnv
+from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import InvalidActionError
 
 SMALL = {"num_robots": 4, "num_tasks": 12, "queue_len": 3}

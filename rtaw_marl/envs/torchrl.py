@@ -35,9 +35,9 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Binary, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from rtaw_marl.envs.features import OBSERVATION_KEYS, robot_features, task_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.core import SimBuffers, SimConfig, WarehouseSim
-from rtaw_marl.sim.features import OBSERVATION_KEYS, robot_features, task_features
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.registry import make_layout, make_navigator, make_task_stream, sim_config
 from rtaw_marl.sim.tasks import TaskStream

@@ -1,0 +1,64 @@
+"""Trained RTAW networks as greedy policies on the bare simulator, loaded from checkpoints."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from rtaw_marl.envs.features import robot_features, task_features
+from rtaw_marl.models.checkpoint import build_networks, load_checkpoint
+from rtaw_marl.models.rtaw import RTAWActor
+from rtaw_marl.sim.core import WarehouseSim
+
+__all__ = ["SimNetworkPolicy", "load_policy"]
+
+
+def load_policy(path: str | Path, name: str | None = None) -> SimNetworkPolicy:
+    """A greedy policy from a checkpoint; it runs on any ``M``, ``N``, layout or navigator.
+
+    Args:
+        path: The checkpoint file.
+        name: Label in result tables; ``rtaw:<path>`` by default.
+
+    Raises:
+        ConfigError: The checkpoint is missing, unreadable or for another feature layout.
+    """
+    ckpt = load_checkpoint(path)
+    actor, _ = build_networks(ckpt["model_config"])
+    actor.load_state_dict(ckpt["model"]["actor"])
+    return SimNetworkPolicy(actor, name=name or f"rtaw:{path}")
+
+
+class SimNetworkPolicy:
+    """Greedy (argmax) RTAW decisions on a bare simulator, for evaluation.
+
+    Args:
+        net: A trained policy network.
+        name: Label used in result tables.
+    """
+
+    def __init__(self, net: RTAWActor, name: str = "rtaw") -> None:
+        self.net = net.eval()
+        self.name = name
+
+    def reset(self, seed: int | None = None) -> None:
+        """Nothing to seed: greedy decisions are deterministic."""
+
+    @torch.no_grad()
+    def act_sim(self, sim: WarehouseSim) -> int:
+        """The slot with the largest logit among the non-empty ones."""
+        scale = sim.layout.scale
+        robots = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, scale)
+        tasks = task_features(
+            sim.queue_rows, sim.queue_length, sim.robot_distances(), sim.queue_mask, scale
+        )
+        mask = torch.from_numpy(sim.queue_mask.copy())
+        logits = self.net(
+            torch.from_numpy(robots),
+            torch.from_numpy(tasks),
+            torch.from_numpy(np.ascontiguousarray(robots[sim.robot])),
+            mask,
+        )
+        return int(torch.where(mask, logits, -torch.inf).argmax())

@@ -1,0 +1,1 @@
+"""Pictures: episode GIFs (:mod:`.gif`) and training plots (:mod:`.plots`)."""
