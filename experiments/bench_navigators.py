@@ -28,9 +28,9 @@ import sys
 import time
 
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.mapf.conflicts import check_schedule
 
 NOISELESS = {"noise_mean": 0.0, "noise_var": 0.0}
 
@@ -45,9 +45,9 @@ def episode(sim: WarehouseSim, seed: int) -> dict[str, float]:
         sim.step(policy.act_sim(sim))
     seconds = time.perf_counter() - start
     stats = {"planning_calls": 0.0, "evacuations": 0.0, "cbs_fallbacks": 0.0}
-    if sim.fleet is not None:
+    if sim.executor.collision_aware:
         check_schedule(sim.layout, sim.schedule(), expected_tasks=sim.config.num_tasks)
-        stats = sim.fleet.stats()
+        stats = sim.executor.stats()
     return {
         "seconds": seconds,
         "calls": stats["planning_calls"],
@@ -67,7 +67,7 @@ def ten_robots(layouts: str, seeds: list[int]) -> str:
     for nav in ("astar", "sipp", "cbs"):
         runs = []
         for i, p in enumerate(layouts):
-            sim = build_sim(env, {"name": "preset", "preset": p}, nav, "designated")
+            sim = SimSpec.of(env, {"name": "preset", "preset": p}, nav, "designated").build()
             if i == 0:
                 episode(sim, 999)  # warm-up
             runs += [episode(sim, s) for s in seeds]
@@ -94,7 +94,7 @@ def scaling(robots: list[int], seeds: list[int], navigators: dict[str, int]) -> 
             if m > max_m:
                 continue
             env = {"num_robots": m, "num_tasks": 5 * m, "queue_len": 10, **NOISELESS}
-            sim = build_sim(env, {"name": "preset", "preset": "C"}, nav, "designated")
+            sim = SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated").build()
             if i == 0:
                 episode(sim, 999)
             runs = [episode(sim, s) for s in seeds]

@@ -23,12 +23,14 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from hydra import compose, initialize_config_dir
 from torchrl.collectors import Collector, MultiSyncCollector
 
-from rtaw_marl.cli import CONF_DIR
+from rtaw_marl.config import compose, to_typed
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
-from rtaw_marl.models import RTAWActor, make_actor
+from rtaw_marl.models.actor_critic import make_actor
+from rtaw_marl.models.checkpoint import build_networks
+from rtaw_marl.models.config import RTAWConfig
+from rtaw_marl.sim.builder import SimSpec
 
 MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 
@@ -42,10 +44,9 @@ def _layout() -> dict:
 
 def _make_env(m: int, envs: int, seed: int, layout: dict) -> BatchedWarehouseEnv:
     return BatchedWarehouseEnv(
-        {"num_robots": m, "num_tasks": 500, "queue_len": 10},
-        layout,
-        "astar",
-        "designated",
+        SimSpec.of(
+            {"num_robots": m, "num_tasks": 500, "queue_len": 10}, layout, "astar", "designated"
+        ),
         num_envs=envs,
         seed=seed,
     )
@@ -56,7 +57,7 @@ def bench_collection(
 ) -> list[float]:
     """Collected frames per second (policy sampling included), one value per repeat."""
     layout = _layout()
-    actor = make_actor(RTAWActor())
+    actor = make_actor(build_networks(RTAWConfig())[0])
     rates = []
     for rep in range(repeats):
         kwargs = {
@@ -81,7 +82,7 @@ def bench_collection(
 @torch.no_grad()
 def bench_latency(m: int, n: int, calls: int) -> float:
     """Median seconds of one policy forward (batch of one decision)."""
-    net = RTAWActor().eval()
+    net = build_networks(RTAWConfig())[0].eval()
     robots, tasks = torch.rand(1, m, 3), torch.rand(1, n, 6)
     agent, mask = torch.rand(1, 3), torch.ones(1, n, dtype=torch.bool)
     for _ in range(20):
@@ -98,16 +99,8 @@ def bench_time_to_beat_mpdm(frames: int, every: int, algo: str) -> tuple[list[di
     """Train on the default scenario; evaluation history and MPDM's TTD."""
     from rtaw_marl.training.ppo import train
 
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        cfg = compose(
-            config_name="train",
-            overrides=[
-                f"frames={frames}",
-                f"eval.every_frames={every}",
-                f"algo={algo}",
-                "progress=false",
-            ],
-        )
+    overrides = [f"frames={frames}", f"eval.every_frames={every}", f"algo={algo}", "progress=false"]
+    cfg = to_typed(compose("train", overrides))
     with tempfile.TemporaryDirectory() as tmp:
         result = train(cfg, tmp)
     return result.history, result.mpdm_ttd

@@ -28,7 +28,7 @@ from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.policies.pretrained.registry import pretrained_path
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.builder import SimSpec
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results.md"
@@ -85,7 +85,7 @@ def table1(mode: str) -> tuple[str, dict]:
     for label, layout, nav, pretrained in ROWS:
         for m in (10, 100):
             env = {"num_robots": m, "num_tasks": 500, "queue_len": 10, "episode_mode": mode}
-            sim = build_sim(env, layout, nav, "designated")
+            sim = SimSpec.of(env, layout, nav, "designated").build()
             res = evaluate(sim, _policies(sim, pretrained[m]), SEEDS)
             ttd = {k: v["ttd"] for k, v in res.items()}
             data[(label, m)] = ttd
@@ -121,7 +121,7 @@ def table2() -> str:
             env = {"num_robots": m, "num_tasks": 5000, "queue_len": 10, "episode_mode": "paper"}
             # Random tasks spread over the whole grid: the designated centres of the
             # 60x60 setting would leave most of a 256x256 or 300x300 grid unused.
-            sim = build_sim(env, layout, nav, "random")
+            sim = SimSpec.of(env, layout, nav, "random").build()
             res = evaluate(sim, _policies(sim, pretrained), SEEDS)
             ttd = {k: v["ttd"] for k, v in res.items()}
             wall = " / ".join(f"{np.mean(res[k]['wall_time_s']):.1f}" for k in res)
@@ -140,14 +140,14 @@ def transfer() -> str:
     lines = [header, "|" + "---|" * (len(presets) + 1)]
     mpdm = {}
     for p in presets:
-        sim = build_sim({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": p},
-                        "astar", "designated")  # fmt: skip
+        sim = SimSpec.of({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": p},
+                        "astar", "designated").build()  # fmt: skip
         mpdm[p] = evaluate(sim, {"m": make_baseline("mpdm")}, SEEDS)["m"]["ttd"]
     for trained in presets:
         cells = []
         for p in presets:
-            sim = build_sim({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": p},
-                            "astar", "designated")  # fmt: skip
+            sim = SimSpec.of({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": p},
+                            "astar", "designated").build()  # fmt: skip
             policy = load_policy(pretrained_path(f"{trained}_astar_m10"))
             ttd = evaluate(sim, {"r": policy}, SEEDS)["r"]["ttd"]
             cells.append(_imp(mpdm[p], ttd))
@@ -182,7 +182,7 @@ def navigators(seeds: list[int]) -> str:
     for p in "ABCDE":
         for nav in ("astar", "sipp", "cbs"):
             layout = {"name": "preset", "preset": p, "width": 60, "height": 60}
-            sim = build_sim(env, layout, nav, "designated")
+            sim = SimSpec.of(env, layout, nav, "designated").build()
             res = evaluate(sim, _policies(sim, f"{p}_astar_m10"), seeds)
             ttd = {k: np.asarray(v["ttd"]) for k, v in res.items()}
             for base in ("MPDM", "RBTS"):

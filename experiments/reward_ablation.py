@@ -22,7 +22,7 @@ from pathlib import Path
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.network import load_policy
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.builder import SimSpec
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from paper_tables import SEEDS, _imp, _ms, replace_section
@@ -45,8 +45,8 @@ def train(reward: str) -> Path:
 
 
 def table(runs: dict[str, Path]) -> str:
-    sim = build_sim({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": "A"},
-                    "astar", "designated")  # fmt: skip
+    sim = SimSpec.of({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": "A"},
+                    "astar", "designated").build()  # fmt: skip
     policies = {"MPDM": make_baseline("mpdm")}
     policies.update(
         {f"RTAW, reward={r}": load_policy(p / "checkpoints" / "best.pt") for r, p in runs.items()}

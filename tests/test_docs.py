@@ -37,3 +37,14 @@ def test_readme_links_exist() -> None:
     readme = (ROOT / "README.md").read_text()
     for link in re.findall(r"\]\((docs/[^)]+)\)", readme):
         assert (ROOT / link).is_file(), link
+
+
+def test_configuration_page_documents_every_key() -> None:
+    """docs/configuration.md's key reference is generated from the schemas, and every key
+    of every option has a line in its schema's docstring (gen_config_doc.py)."""
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "experiments" / "gen_config_doc.py"), "--check"],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr

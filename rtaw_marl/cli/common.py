@@ -1,22 +1,58 @@
-"""Helpers shared by the command-line entry points."""
+"""What the command-line entry points share: the Hydra entry, one-line errors, and
+building the simulator and the policies from a typed config."""
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Callable
 from functools import wraps
 from typing import Any
 
-from omegaconf import DictConfig, OmegaConf
+import hydra
+from hydra.errors import HydraException
+from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
+from rtaw_marl.config import CONF_DIR, config_error, register_configs, to_typed
 from rtaw_marl.errors import ConfigError, RtawError
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.registry import build_sim
 
-__all__ = ["exit_on_user_error", "policies_from_cfg", "sim_from_cfg"]
+__all__ = ["exit_on_user_error", "hydra_entry", "policies_from_cfg", "sim_spec", "typed"]
+
+
+def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable[[], None]:
+    """A console entry point: Hydra composes ``config_name`` and calls ``task``.
+
+    A composition error (unknown key, option or value type) becomes one ``error: ...``
+    line and exit status 2, like every other user error, instead of Hydra's multi-line
+    report and status 1.
+    """
+    register_configs()
+    hydra_main = hydra.main(config_path=str(CONF_DIR), config_name=config_name, version_base="1.3")(
+        task
+    )
+
+    def main() -> None:
+        previous = os.environ.get("HYDRA_FULL_ERROR")
+        # Let composition errors reach this frame instead of Hydra's own report.
+        os.environ["HYDRA_FULL_ERROR"] = "1"
+        try:
+            hydra_main()
+        except (HydraException, OmegaConfBaseException, RtawError) as exc:
+            print(f"error: {config_error(exc)}", file=sys.stderr)
+            sys.exit(2)
+        finally:
+            if previous is None:
+                os.environ.pop("HYDRA_FULL_ERROR", None)
+            else:
+                os.environ["HYDRA_FULL_ERROR"] = previous
+
+    main.__doc__ = f"Console entry point of the {config_name!r} config."
+    return main
 
 
 def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
@@ -26,35 +62,27 @@ def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig]
     def wrapper(cfg: DictConfig) -> Any:
         try:
             return fn(cfg)
-        except (RtawError, OmegaConfBaseException) as exc:
-            print(
-                f"error: {exc}".splitlines()[0] if isinstance(exc, RtawError) else _omega(exc),
-                file=sys.stderr,
-            )
+        except (RtawError, HydraException, OmegaConfBaseException) as exc:
+            print(f"error: {config_error(exc)}".splitlines()[0], file=sys.stderr)
             sys.exit(2)
 
     return wrapper
 
 
-def _omega(exc: OmegaConfBaseException) -> str:
-    key = getattr(exc, "full_key", None)
-    first = str(exc).splitlines()[0]
-    return f"error: config key {key!r}: {first}" if key else f"error: {first}"
+def typed(cfg: DictConfig | Any) -> Any:
+    """The typed dataclass of a composed config (a typed config passes through)."""
+    return to_typed(cfg) if isinstance(cfg, DictConfig) else cfg
 
 
-def sim_from_cfg(cfg: DictConfig) -> WarehouseSim:
-    """Build the simulator from the ``env``, ``layout``, ``navigator`` and ``tasks`` groups."""
-    env = OmegaConf.to_container(cfg.env, resolve=True, throw_on_missing=True)
-    layout = OmegaConf.to_container(cfg.layout, resolve=True, throw_on_missing=True)
-    tasks = OmegaConf.to_container(cfg.tasks, resolve=True, throw_on_missing=True)
-    navigator = OmegaConf.to_container(cfg.navigator, resolve=True, throw_on_missing=True)
-    return build_sim(env, layout, navigator, tasks)
+def sim_spec(cfg: Any) -> SimSpec:
+    """The simulator spec of a typed run config (its four sim groups)."""
+    return SimSpec.of(cfg.env, cfg.layout, cfg.navigator, cfg.tasks)
 
 
-def policies_from_cfg(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
+def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
     """Policies by name: baselines, ``checkpoint`` (one greedy policy per path in
     ``cfg.checkpoint``) and ``rtaw`` (one per shipped policy named in ``cfg.pretrained``)."""
-    sources = {"checkpoint": _as_list(cfg.checkpoint), "rtaw": _as_list(cfg.pretrained)}
+    sources = {"checkpoint": as_list(cfg.checkpoint), "rtaw": as_list(cfg.pretrained)}
     for option, key in (("checkpoint", "checkpoint"), ("rtaw", "pretrained")):
         if option in names and not sources[option]:
             raise ConfigError(f"policy={option} needs {key}=... (one value or a list)")
@@ -80,7 +108,8 @@ def policies_from_cfg(cfg: DictConfig, names: list[str], sim: WarehouseSim) -> d
     return policies
 
 
-def _as_list(value: object) -> list[str]:
+def as_list(value: object) -> list[str]:
+    """``None`` -> ``[]``, a scalar -> ``[str(value)]``, a list -> its items as strings."""
     if value is None:
         return []
-    return [str(value)] if isinstance(value, str) else [str(v) for v in value]
+    return [str(value)] if isinstance(value, (str, int)) else [str(v) for v in value]

@@ -10,29 +10,38 @@ Examples::
 
 from __future__ import annotations
 
-import hydra
 from hydra.core.hydra_config import HydraConfig
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 from tqdm import tqdm
 
-from rtaw_marl.cli import CONF_DIR
-from rtaw_marl.cli.common import exit_on_user_error, policies_from_cfg, sim_from_cfg
+from rtaw_marl.cli.common import (
+    as_list,
+    exit_on_user_error,
+    hydra_entry,
+    policies_from_cfg,
+    sim_spec,
+    typed,
+)
+from rtaw_marl.config import as_plain
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
+from rtaw_marl.evaluation.config import EvalConfig
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
+from rtaw_marl.sim.builder import build_sim
 
 
 @exit_on_user_error
-def run(cfg: DictConfig) -> dict:
+def run(cfg: DictConfig | EvalConfig) -> dict:
     """Evaluate ``cfg.policy`` on ``cfg.seeds`` and write the results; returns them."""
-    names = [cfg.policy] if isinstance(cfg.policy, str) else list(cfg.policy)
+    cfg = typed(cfg)
+    names = as_list(cfg.policy)
     seeds = [cfg.seeds] if isinstance(cfg.seeds, int) else list(cfg.seeds)
     if not names:
         raise ConfigError("policy must name at least one policy")
-    if not seeds or not all(isinstance(s, int) for s in seeds):
+    if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
         raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
-    sim = sim_from_cfg(cfg)
+    sim = build_sim(sim_spec(cfg))
     print(f"layout {sim.layout.describe()}")
     policies = policies_from_cfg(cfg, names, sim)
     total = len(policies) * len(seeds) * sim.config.num_tasks
@@ -47,22 +56,13 @@ def run(cfg: DictConfig) -> dict:
 
     print(format_table(results, lower_bound=bound))
     output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json"
-    payload = {
-        "config": OmegaConf.to_container(cfg, resolve=True),
-        "seeds": seeds,
-        "lower_bound": bound,
-        "policies": results,
-    }
+    payload = {"config": as_plain(cfg), "seeds": seeds, "lower_bound": bound, "policies": results}
     path = write_json_atomic(output, payload)
     print(f"results: {path}")
     return payload
 
 
-@hydra.main(config_path=str(CONF_DIR), config_name="eval", version_base="1.3")
-def main(cfg: DictConfig) -> None:
-    """Console entry point."""
-    run(cfg)
-
+main = hydra_entry("eval", run)
 
 if __name__ == "__main__":
     main()

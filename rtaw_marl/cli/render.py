@@ -14,37 +14,38 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli import CONF_DIR
-from rtaw_marl.cli.common import exit_on_user_error, policies_from_cfg, sim_from_cfg
+from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, sim_spec, typed
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation.config import RenderConfig
 from rtaw_marl.evaluation.evaluate import run_episode
-from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.sim.builder import build_sim
+from rtaw_marl.sim.mapf.conflicts import check_schedule
 from rtaw_marl.viz.gif import render_gif
 
 
 @exit_on_user_error
-def run(cfg: DictConfig) -> Path:
+def run(cfg: DictConfig | RenderConfig) -> Path:
     """Play ``cfg.policy`` on seed ``cfg.seed``, check the schedule, write the GIF."""
+    cfg = typed(cfg)
     if not isinstance(cfg.policy, str):
         raise ConfigError(f"policy must name one policy, got {cfg.policy}")
     if isinstance(cfg.seed, bool) or not isinstance(cfg.seed, int):
         raise ConfigError(f"seed must be an integer, got {cfg.seed!r}")
-    sim = sim_from_cfg(cfg)
-    if sim.navigator.make_fleet(1) is None:
+    if not cfg.navigator.collision_aware:
         raise ConfigError(
-            f"navigator={sim.navigator.name} moves robots independently (they pass through "
+            f"navigator={cfg.navigator.name} moves robots independently (they pass through "
             "each other); render with navigator=sipp or navigator=cbs"
         )
+    sim = build_sim(sim_spec(cfg))
     (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
     metrics = run_episode(sim, policy, int(cfg.seed))
     schedule = sim.schedule()
     check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
     output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif"
-    title = f"{name} | {sim.navigator.name} | {sim.layout.name} | seed {cfg.seed}"
+    title = f"{name} | {cfg.navigator.name} | {sim.layout.name} | seed {cfg.seed}"
     path = render_gif(
         sim.layout,
         schedule,
@@ -65,10 +66,7 @@ def run(cfg: DictConfig) -> Path:
     return path
 
 
-@hydra.main(config_path=str(CONF_DIR), config_name="render", version_base="1.3")
-def main(cfg: DictConfig) -> None:
-    """Console entry point."""
-    run(cfg)
+main = hydra_entry("render", run)
 
 
 if __name__ == "__main__":

@@ -11,17 +11,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import hydra
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli import CONF_DIR
-from rtaw_marl.cli.common import exit_on_user_error
+from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, typed
+from rtaw_marl.training.config import TrainConfig
 
 
 @exit_on_user_error
-def run(cfg: DictConfig) -> None:
+def run(cfg: DictConfig | TrainConfig) -> None:
     """Train as configured and print where the checkpoints are."""
+    cfg = typed(cfg)
     from rtaw_marl.training.ppo import train
 
     run_dir = Path(cfg.output_dir or HydraConfig.get().runtime.output_dir)
@@ -34,11 +34,7 @@ def run(cfg: DictConfig) -> None:
     print(f"checkpoints: {result.best_checkpoint} {result.last_checkpoint}")
 
 
-@hydra.main(config_path=str(CONF_DIR), config_name="train", version_base="1.3")
-def main(cfg: DictConfig) -> None:
-    """Console entry point."""
-    run(cfg)
-
+main = hydra_entry("train", run)
 
 if __name__ == "__main__":
     main()

@@ -65,15 +65,17 @@ holds the episode metrics (`ttd`, `makespan`, ...).
 
 ## Arguments
 
-`num_robots=10, num_tasks=500, queue_len=10, episode_mode="drain", noise_mean=0.25,
-noise_var=0.25, reward="ttd", robot_starts=None, robot_free_times=None,
-layout="shelves", navigator="astar", tasks="designated", render_mode=None`.
-`layout` and `tasks` take a name, a `{"name": ..., **params}` mapping or an object
-(`Layout`, `TaskStream`); `layout` also takes a file path. `navigator` is `"direct"`,
-`"astar"`, or a collision-aware `"sipp"` / `"cbs"` (or `{"name": "cbs", "time_limit":
-5}`): robots then occupy cells and wait for each other, the reward is the TTD planned
-at the decision and the episode metrics count the executed waits; these need
-`noise_mean=0, noise_var=0`. `render_mode="ansi"` returns the grid as text.
+`env(layout=None, navigator=None, tasks=None, render_mode=None, **env)`: the simulator
+keys `**env` are those of `SimConfig` (`num_robots=10, num_tasks=500, queue_len=10,
+episode_mode="drain", noise_mean=0.25, noise_var=0.25, reward="ttd", robot_starts=None,
+robot_free_times=None`; an unknown key is an error listing them). `layout` and `tasks`
+take an option name, a `{"name": ..., **keys}` mapping, a typed option
+(`rtaw_marl.sim.options`) or an object (`Layout`, `TaskStream`); `layout` also takes a
+file path; `None` means the default (`"shelves"`, `"designated"`). `navigator` is
+`"direct"`, `"astar"` (default), or a collision-aware `"sipp"` / `"cbs"` (or `{"name":
+"cbs", "time_limit": 5}`): robots then occupy cells and wait for each other, the reward
+is the TTD planned at the decision and the episode metrics count the executed waits;
+these need `noise_mean=0, noise_var=0`. `render_mode="ansi"` returns the grid as text.
 
 ## Version History
 
@@ -82,7 +84,7 @@ at the decision and the episode metrics count the executed waits; these need
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
@@ -93,11 +95,10 @@ from pettingzoo.utils import wrappers
 from rtaw_marl import register_envs
 from rtaw_marl.envs.features import robot_features, task_features
 from rtaw_marl.envs.text import render_ansi
-from rtaw_marl.sim.core import SimConfig, WarehouseSim
-from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.navigation import Navigator
-from rtaw_marl.sim.registry import build_sim
-from rtaw_marl.sim.tasks import TaskStream
+from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
 __all__ = ["env", "raw_env"]
 
@@ -122,35 +123,33 @@ class raw_env(AECEnv):
 
     def __init__(
         self,
-        num_robots: int = 10,
-        num_tasks: int = 500,
-        queue_len: int = 10,
-        episode_mode: str = "drain",
-        noise_mean: float = 0.25,
-        noise_var: float = 0.25,
-        reward: str = "ttd",
-        robot_starts: Sequence[Sequence[int]] | None = None,
-        robot_free_times: Sequence[float] | None = None,
-        layout: str | Mapping[str, Any] | Layout = "shelves",
-        navigator: str | Mapping[str, Any] = "astar",
-        tasks: str | Mapping[str, Any] | TaskStream = "designated",
+        layout: str | Mapping[str, Any] | LayoutOption | None = None,
+        navigator: str | Mapping[str, Any] | NavigatorOption | None = None,
+        tasks: str | Mapping[str, Any] | TaskOption | None = None,
         render_mode: str | None = None,
+        **env: Any,
     ) -> None:
+        """Build the env.
+
+        Args:
+            layout: A layout option: a name (``"shelves"``, ``"A"`` is ``{"name":
+                "preset", "preset": "A"}``), a file path, a ``{"name": ..., **keys}``
+                mapping or a typed option; ``None``: the default (60x60 shelves).
+            navigator: ``"direct"``, ``"astar"`` (default), ``"sipp"``, ``"cbs"``, or a
+                mapping/typed option with their keys.
+            tasks: A task-stream option (default ``"designated"``).
+            render_mode: ``None`` or ``"ansi"``.
+            **env: Simulator keys (:class:`~rtaw_marl.sim.core.SimConfig`:
+                ``num_robots``, ``num_tasks``, ``queue_len``, ``episode_mode``,
+                ``noise_mean``, ``noise_var``, ``reward``, ``robot_starts``,
+                ``robot_free_times``); an unknown key is a ``ConfigError`` listing them.
+        """
         super().__init__()
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'ansi', got {render_mode!r}")
-        config = SimConfig(
-            num_robots=num_robots,
-            num_tasks=num_tasks,
-            queue_len=queue_len,
-            episode_mode=episode_mode,
-            noise_mean=noise_mean,
-            noise_var=noise_var,
-            reward=reward,
-            robot_starts=None if robot_starts is None else tuple(map(tuple, robot_starts)),
-            robot_free_times=None if robot_free_times is None else tuple(robot_free_times),
-        )
-        self.sim: WarehouseSim = build_sim(config, layout, navigator, tasks)
+        spec = SimSpec.of(env, layout, navigator, tasks)
+        config = spec.env
+        self.sim: WarehouseSim = build_sim(spec)
         self.render_mode = render_mode
         self.scale = self.sim.layout.scale
         m, n = config.num_robots, config.queue_len

@@ -26,7 +26,6 @@ current episodes, so any episode can be replayed in the PettingZoo env.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -37,10 +36,8 @@ from torchrl.envs import EnvBase
 
 from rtaw_marl.envs.features import OBSERVATION_KEYS, robot_features, task_features
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.sim.core import SimBuffers, SimConfig, WarehouseSim
-from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.registry import make_layout, make_navigator, make_task_stream, sim_config
-from rtaw_marl.sim.tasks import TaskStream
+from rtaw_marl.sim.builder import SimFactory, SimSpec
+from rtaw_marl.sim.core import SimBuffers
 
 __all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]
 
@@ -49,33 +46,20 @@ class BatchedWarehouseEnv(EnvBase):
     """``num_envs`` warehouse simulators as one TorchRL env with batch size ``[num_envs]``.
 
     Args:
-        env: :class:`SimConfig` or a mapping of the ``env.*`` keys.
-        layout: Layout spec (name, path, mapping or :class:`Layout`).
-        navigator: Navigator name.
-        tasks: Task stream spec (name, mapping or :class:`TaskStream`).
+        spec: The simulator spec (:class:`~rtaw_marl.sim.builder.SimSpec`); the layout,
+            distance model and task stream are built once and shared by all simulators.
         num_envs: ``B``.
         seed: Base seed of the episode seeds.
     """
 
-    def __init__(
-        self,
-        env: SimConfig | Mapping[str, Any],
-        layout: str | Mapping[str, Any] | Layout,
-        navigator: str,
-        tasks: str | Mapping[str, Any] | TaskStream,
-        num_envs: int = 16,
-        seed: int = 0,
-    ) -> None:
+    def __init__(self, spec: SimSpec, num_envs: int, seed: int = 0) -> None:
         if int(num_envs) < 1:
             raise ConfigError(f"num_envs must be >= 1, got {num_envs}")
         super().__init__(batch_size=torch.Size([num_envs]), device="cpu")
-        config = env if isinstance(env, SimConfig) else sim_config(env)
-        grid = make_layout(layout)
-        nav = make_navigator(navigator, grid)
-        stream = make_task_stream(tasks)
-        b, m, n = int(num_envs), config.num_robots, config.queue_len
+        factory = SimFactory(spec)
+        b, m, n = int(num_envs), spec.env.num_robots, spec.env.queue_len
         self.num_envs, self.num_robots, self.queue_len = b, m, n
-        self.scale = grid.scale
+        self.scale = factory.layout.scale
         self._robot_xy = np.zeros((b, m, 2), dtype=np.int64)
         self._free_at = np.zeros((b, m), dtype=np.float64)
         self._mask = np.zeros((b, n), dtype=bool)
@@ -85,18 +69,14 @@ class BatchedWarehouseEnv(EnvBase):
         self._robot = np.zeros(b, dtype=np.int64)
         self._dist = np.zeros((b, n), dtype=np.float64)
         self.sims = [
-            WarehouseSim(
-                config,
-                grid,
-                nav,
-                stream,
+            factory(
                 SimBuffers(
                     self._robot_xy[i],
                     self._free_at[i],
                     self._mask[i],
                     self._rows[i],
                     self._length[i],
-                ),
+                )
             )
             for i in range(b)
         ]

@@ -6,8 +6,8 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Protocol
 
-from rtaw_marl.sim.conflicts import check_schedule
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.mapf.conflicts import check_schedule
 from rtaw_marl.sim.metrics import EpisodeMetrics
 
 __all__ = ["SimPolicy", "evaluate", "run_episode"]
@@ -66,7 +66,7 @@ def evaluate(
     Returns:
         ``{policy: {metric: [one value per seed]}}`` with every :class:`EpisodeMetrics`
         field plus ``wall_time_s`` (seconds per episode); with a collision-aware
-        navigator also the fleet's ``planning_calls``, ``evacuations`` (robots moved
+        navigator also the executor's ``planning_calls``, ``evacuations`` (robots moved
         out of another's way) and ``cbs_fallbacks`` per episode.
 
     Raises:
@@ -83,10 +83,10 @@ def evaluate(
             for key, value in metrics.as_dict().items():
                 per_metric.setdefault(key, []).append(value)
             per_metric.setdefault("wall_time_s", []).append(elapsed)
-            if sim.fleet is not None:
+            if sim.executor.collision_aware:
                 # Every collision-aware episode is validated on the checker's own code path.
                 check_schedule(sim.layout, sim.schedule(), expected_tasks=metrics.tasks_served)
-                for key, value in sim.fleet.stats().items():
-                    per_metric.setdefault(key, []).append(value)
+            for key, value in sim.executor.stats().items():
+                per_metric.setdefault(key, []).append(value)
         results[name] = per_metric
     return results

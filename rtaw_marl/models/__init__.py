@@ -1,14 +1,5 @@
-"""The RTAW network and its TorchRL actor/critic wrappers."""
+"""Networks (:mod:`.rtaw`), their TorchRL actor/critic modules (:mod:`.actor_critic`),
+their typed options (:mod:`.config`, no torch) and checkpoint I/O (:mod:`.checkpoint`).
 
-from __future__ import annotations
-
-from rtaw_marl.models.actor_critic import make_actor, make_critic
-from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic, RTAWEncoder
-
-__all__ = [
-    "RTAWActor",
-    "RTAWCritic",
-    "RTAWEncoder",
-    "make_actor",
-    "make_critic",
-]
+Import the submodule you need: this package does not import torch by itself.
+"""

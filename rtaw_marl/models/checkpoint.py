@@ -17,8 +17,10 @@ target, so a kill at any moment leaves the previous or the new checkpoint, both 
 
 from __future__ import annotations
 
+import dataclasses
 import platform
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +32,7 @@ import torchrl
 import rtaw_marl
 from rtaw_marl.envs.features import ROBOT_FEATURES, TASK_FEATURES
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.models.config import RTAWConfig
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
 from rtaw_marl.utils.atomic import atomic_write
 
@@ -93,18 +96,20 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
     return ckpt
 
 
-def build_networks(model_config: dict[str, int]) -> tuple[RTAWActor, RTAWCritic]:
-    """Fresh actor and critic networks for ``model_config`` (``embed_dim``, ``head_dim``,
-    ``critic_hidden``)."""
-    allowed = {"embed_dim", "head_dim", "critic_hidden"}
-    unknown = sorted(set(model_config) - allowed)
-    if unknown:
-        raise ConfigError(f"unknown model keys {unknown}; available: {', '.join(sorted(allowed))}")
-    embed = int(model_config.get("embed_dim", 16))
-    actor = RTAWActor(
-        len(ROBOT_FEATURES), len(TASK_FEATURES), embed, int(model_config.get("head_dim", 8))
-    )
-    critic = RTAWCritic(
-        len(ROBOT_FEATURES), len(TASK_FEATURES), embed, int(model_config.get("critic_hidden", 32))
-    )
+def build_networks(model: RTAWConfig | Mapping[str, Any]) -> tuple[RTAWActor, RTAWCritic]:
+    """Fresh actor and critic networks for a model option (or a checkpoint's
+    ``model_config`` mapping).
+
+    Raises:
+        ConfigError: A key is unknown (the message lists the valid ones) or invalid.
+    """
+    if not isinstance(model, RTAWConfig):
+        allowed = [f.name for f in dataclasses.fields(RTAWConfig)]
+        unknown = sorted(set(model) - set(allowed))
+        if unknown:
+            raise ConfigError(f"unknown key model.{unknown[0]}; valid keys: {', '.join(allowed)}")
+        model = RTAWConfig(**model)
+    robot_in, task_in = len(ROBOT_FEATURES), len(TASK_FEATURES)
+    actor = RTAWActor(robot_in, task_in, model.embed_dim, model.head_dim)
+    critic = RTAWCritic(robot_in, task_in, model.embed_dim, model.critic_hidden)
     return actor, critic

@@ -44,7 +44,7 @@ class RTAWEncoder(nn.Module):
         embed_dim: Embedding size ``E`` (16 in the paper).
     """
 
-    def __init__(self, robot_dim: int = 3, task_dim: int = 6, embed_dim: int = 16) -> None:
+    def __init__(self, robot_dim: int, task_dim: int, embed_dim: int) -> None:
         super().__init__()
         self.robot_dim, self.task_dim, self.embed_dim = robot_dim, task_dim, embed_dim
         self.robot_embed = _mlp(robot_dim, embed_dim, embed_dim, nn.ReLU)
@@ -90,9 +90,7 @@ class RTAWActor(nn.Module):
         head_dim: Hidden size of the per-task scoring layer (8 in the paper).
     """
 
-    def __init__(
-        self, robot_dim: int = 3, task_dim: int = 6, embed_dim: int = 16, head_dim: int = 8
-    ) -> None:
+    def __init__(self, robot_dim: int, task_dim: int, embed_dim: int, head_dim: int) -> None:
         super().__init__()
         self.encoder = RTAWEncoder(robot_dim, task_dim, embed_dim)
         self.head = _mlp(4 * embed_dim, head_dim, 1, nn.ReLU)
@@ -120,9 +118,7 @@ class RTAWCritic(nn.Module):
         hidden_dim: Hidden size of the value head.
     """
 
-    def __init__(
-        self, robot_dim: int = 3, task_dim: int = 6, embed_dim: int = 16, hidden_dim: int = 32
-    ) -> None:
+    def __init__(self, robot_dim: int, task_dim: int, embed_dim: int, hidden_dim: int) -> None:
         super().__init__()
         self.encoder = RTAWEncoder(robot_dim, task_dim, embed_dim)
         self.head = _mlp(3 * embed_dim, hidden_dim, 1, nn.Tanh)

@@ -20,29 +20,34 @@ Episode modes (``episode_mode``):
 
 Per decision the work is a handful of numpy calls over ``M`` robots and ``N`` slots.
 
-Collision-aware navigators (``sipp``, ``cbs``) replace the distance model of travel by
-a :class:`~rtaw_marl.sim.fleet.Fleet` executing every task on the shared grid in whole
-seconds: a task's TTD is the real arrival time at its origin minus the decision time,
-waits included, and a robot is free when its planned path reaches the destination.
-The reward of a decision is the TTD as planned at that decision (its single-robot
-distance while the robot has to wait to plan); :meth:`WarehouseSim.metrics` reports
-the executed times, final once the episode is done and the fleet has delivered every
-assigned task. :meth:`WarehouseSim.schedule` returns the executed episode.
+How robots travel is the simulator's :class:`~rtaw_marl.sim.execution.Executor`:
+:class:`~rtaw_marl.sim.execution.InstantTravel` (the default: distances plus noise) or a
+collision-aware one (:class:`~rtaw_marl.sim.mapf.SIPPExecutor`,
+:class:`~rtaw_marl.sim.mapf.CBSExecutor`) executing every task on the shared grid in
+whole seconds: a task's TTD is the real arrival time at its origin minus the decision
+time, waits included, and a robot is free when its planned path reaches the
+destination. The reward of a decision is the TTD as known at that decision;
+:meth:`WarehouseSim.metrics` reports the executed times, final once the episode is
+done. :meth:`WarehouseSim.schedule` returns the executed episode.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
-from rtaw_marl.sim.fleet import Fleet
+from rtaw_marl.sim.execution import EpisodeRecords, Executor, InstantTravel
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
 from rtaw_marl.sim.navigation import Navigator
-from rtaw_marl.sim.schedule import Schedule
 from rtaw_marl.sim.tasks import TaskStream
+
+if TYPE_CHECKING:
+    # Type-only: the schedule type lives with the planners that produce it.
+    from rtaw_marl.sim.mapf.schedule import Schedule
 
 __all__ = ["EPISODE_MODES", "REWARDS", "SimBuffers", "SimConfig", "WarehouseSim"]
 
@@ -75,8 +80,8 @@ class SimConfig:
     noise_mean: float = 0.25
     noise_var: float = 0.25
     reward: str = "ttd"
-    robot_starts: tuple[tuple[int, int], ...] | None = None
-    robot_free_times: tuple[float, ...] | None = None
+    robot_starts: list[list[int]] | None = None
+    robot_free_times: list[float] | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -170,6 +175,8 @@ class WarehouseSim:
         navigator: Distances on ``layout``.
         tasks: The task stream.
         buffers: Where to keep the robot and queue state; allocated when ``None``.
+        executor: How robots travel (a fresh one per simulator);
+            :class:`~rtaw_marl.sim.execution.InstantTravel` when ``None``.
 
     Public state after :meth:`reset` (read-only views; do not modify):
         robot: Index of the selected robot.
@@ -193,6 +200,7 @@ class WarehouseSim:
         navigator: Navigator,
         tasks: TaskStream,
         buffers: SimBuffers | None = None,
+        executor: Executor | None = None,
     ) -> None:
         if navigator.layout is not layout:
             raise ConfigError("navigator was built for a different layout")
@@ -218,7 +226,6 @@ class WarehouseSim:
         self._num_decisions = config.num_tasks
         self._reward_code = REWARDS.index(config.reward)
         self._slots = navigator.target_slots(config.queue_len)
-        self._noise_std = float(np.sqrt(config.noise_var))
         if buffers is None:
             buffers = SimBuffers.allocate(config.num_robots, config.queue_len)
         buffers.check(config.num_robots, config.queue_len)
@@ -228,9 +235,8 @@ class WarehouseSim:
         self.queue_rows = buffers.queue_rows
         self.queue_length = buffers.queue_length
         self.queue_ids = np.full(config.queue_len, -1, dtype=np.int64)
-        self._fleet = navigator.make_fleet(config.num_robots)
-        if self._fleet is not None:
-            _check_whole_seconds(config, navigator.name)
+        self._executor = InstantTravel() if executor is None else executor
+        self._executor.bind(config, layout, navigator)
         self.done = True
         self.truncated = False
 
@@ -243,19 +249,7 @@ class WarehouseSim:
             np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(3)
         )
         total = cfg.num_tasks + n if self._paper else cfg.num_tasks
-        tasks = np.asarray(self.stream.generate(task_rng, self.layout, total), dtype=np.int64)
-        self.layout.check_cells(tasks[:, :2], "origin of task")
-        self.layout.check_cells(tasks[:, 2:], "destination of task")
-
-        if cfg.robot_starts is not None:
-            starts = np.asarray(cfg.robot_starts, dtype=np.int64)
-            self.layout.check_cells(starts, "start of robot")
-        else:
-            cells = self.layout.main_cells
-            starts = cells[start_rng.choice(len(cells), size=m, replace=False)]
-        self.navigator.check_connected(
-            np.concatenate([tasks[:, :2], tasks[:, 2:], starts]), "cell (tasks, then robots)"
-        )
+        tasks, starts = self._draw(task_rng, start_rng, total)
 
         self.tasks = tasks
         # Lengths are measured when a task enters the queue, from its slot's field.
@@ -264,10 +258,6 @@ class WarehouseSim:
         self.robot_start_xy = starts.copy()
         self.robot_free_at[:] = cfg.robot_free_times if cfg.robot_free_times is not None else 0.0
         self.robot_busy = np.zeros(m, dtype=np.float64)
-        if self._noise_std > 0:
-            self._noise = noise_rng.normal(cfg.noise_mean, self._noise_std, size=cfg.num_tasks)
-        else:
-            self._noise = np.full(cfg.num_tasks, float(cfg.noise_mean))
 
         # Per-task records, filled as tasks arrive and are assigned.
         self.task_arrival = np.full(total, np.nan)
@@ -286,13 +276,41 @@ class WarehouseSim:
             self._enqueue(slot, slot)
         self._next_task = first
 
-        if self._fleet is not None:
-            self._fleet.reset(starts, self.robot_free_at, total)
+        records = EpisodeRecords(
+            tasks=self.tasks,
+            task_arrival=self.task_arrival,
+            task_assigned=self.task_assigned,
+            task_ttd=self.task_ttd,
+            task_finished=self.task_finished,
+            task_robot=self.task_robot,
+            robot_busy=self.robot_busy,
+            robot_free_at=self.robot_free_at,
+        )
+        self._executor.reset(starts, records, noise_rng)
         self.decisions = 0
         self.done = False
         self.truncated = False
         self.last_ttd = 0.0
-        self._select_next_robot()
+        self._select_next_robot(0.0)
+
+    def _draw(
+        self, task_rng: np.random.Generator, start_rng: np.random.Generator, total: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The episode's ``total`` tasks ``int64 [T, 4]`` and robot starts ``int64 [M, 2]``,
+        checked: on free cells, all mutually reachable."""
+        tasks = np.asarray(self.stream.generate(task_rng, self.layout, total), dtype=np.int64)
+        self.layout.check_cells(tasks[:, :2], "origin of task")
+        self.layout.check_cells(tasks[:, 2:], "destination of task")
+        if self.config.robot_starts is not None:
+            starts = np.asarray(self.config.robot_starts, dtype=np.int64)
+            self.layout.check_cells(starts, "start of robot")
+        else:
+            cells = self.layout.main_cells
+            starts = cells[start_rng.choice(len(cells), size=self.num_robots, replace=False)]
+        self.navigator.check_connected(
+            np.concatenate([tasks[:, :2], tasks[:, 2:], starts]), "cell (tasks, then robots)"
+        )
+        return tasks, starts
 
     # ------------------------------------------------------------------ queries
     def robot_distances(self, robot: int | None = None) -> np.ndarray:
@@ -358,22 +376,13 @@ class WarehouseSim:
         dist = self._dist if self._dist is not None else self.robot_distances()
         ttd = float(dist[slot])
         length = float(self.queue_length[slot])
-        if self._fleet is not None:
-            ttd, finish = self._fleet_assign(robot, int(now), task, slot, ttd + length)
-        else:
-            finish = now + ttd + length + float(self._noise[self.decisions])
-            if finish < now:
-                finish = now
+        ttd, finish = self._executor.assign(robot, now, task, self.queue_rows[slot], ttd, length)
 
         self.task_assigned[task] = now
         self.task_ttd[task] = ttd
         self.task_finished[task] = finish
         self.task_robot[task] = robot
         self.robot_xy[robot] = self.queue_rows[slot, 2:]
-        if self._fleet is None:
-            self.robot_free_at[robot] = finish
-        else:
-            self.robot_free_at[:] = self._fleet.estimated_free_at
         # Busy from assignment until free again (noise included), so idle >= 0.
         self.robot_busy[robot] += finish - now
         self._refill(slot, task, now)
@@ -384,10 +393,9 @@ class WarehouseSim:
             self.done = True
             self.truncated = self._paper
             self._dist = None  # the acting robot has moved: its cached distances are stale
-            if self._fleet is not None:
-                self._fleet_finish(now)
+            self._executor.finish(now)
         else:
-            self._select_next_robot()
+            self._select_next_robot(now)
 
         if self._reward_code == 0:
             return -ttd
@@ -421,78 +429,23 @@ class WarehouseSim:
         self.queue_rows[slot] = row
         self.queue_length[slot] = length
 
-    def _select_next_robot(self) -> None:
-        if self._fleet is None:
-            self.robot = int(self.robot_free_at.argmin())
-            self.time = float(self.robot_free_at[self.robot])
-        else:
-            free_at = self._fleet.free_at
-            if np.isinf(free_at.min()):
-                # Every robot waits for another: move some aside (or raise PlanningError).
-                self._fleet.resolve(int(self.time))
-                self.robot_free_at[:] = self._fleet.estimated_free_at
-            self.robot = int(free_at.argmin())
-            self.time = float(free_at[self.robot])
+    def _select_next_robot(self, now: float) -> None:
+        self.robot, self.time = self._executor.next_robot(now)
         self._dist = None
 
-    # ------------------------------------------------------------------ collision-aware
-    def _fleet_assign(
-        self, robot: int, now: int, task: int, slot: int, estimate: float
-    ) -> tuple[float, float]:
-        """Plan ``task`` for ``robot``; the planned ``(ttd, finish)`` (estimates if deferred)."""
-        fleet = self._fleet
-        ox, oy, dx, dy = self.queue_rows[slot].tolist()
-        fleet.assign(robot, now, task, (ox, oy), (dx, dy))
-        pickup, delivered = int(fleet.task_pickup[task]), int(fleet.task_delivered[task])
-        length = float(self.queue_length[slot])
-        if pickup < 0:  # waiting to plan: single-robot distances
-            return estimate - length, now + estimate
-        return float(pickup - now), float(delivered if delivered >= 0 else pickup + length)
-
-    def _fleet_finish(self, now: float) -> None:
-        """Deliver every assigned task, then record the executed times."""
-        fleet = self._fleet
-        fleet.finish(int(now))
-        served = np.flatnonzero(self.task_robot >= 0)
-        self.task_ttd[served] = fleet.task_pickup[served] - self.task_assigned[served]
-        self.task_finished[served] = fleet.task_delivered[served]
-        self.robot_busy[:] = np.bincount(
-            self.task_robot[served],
-            weights=self.task_finished[served] - self.task_assigned[served],
-            minlength=self.num_robots,
-        )
-        self.robot_free_at[:] = fleet.estimated_free_at
-
     @property
-    def fleet(self) -> Fleet | None:
-        """The collision-aware executor (``sipp``, ``cbs``), or ``None``."""
-        return self._fleet
+    def executor(self) -> Executor:
+        """How robots travel: its ``name``, ``collision_aware`` and episode ``stats()``."""
+        return self._executor
 
     def schedule(self) -> Schedule:
         """The executed episode: every robot's cell at every second and each task's times.
 
         Raises:
-            ConfigError: The navigator moves robots independently (``direct``, ``astar``).
+            ConfigError: Robots move independently (the executor is not collision-aware).
             InvalidActionError: The episode is not over.
         """
-        if self._fleet is None:
-            raise ConfigError(
-                f"navigator {self.navigator.name!r} moves robots independently and has no "
-                "schedule; use navigator=sipp or navigator=cbs"
-            )
-        if not self.done:
-            raise InvalidActionError("the schedule is complete only when the episode is done")
-        served = np.flatnonzero(self.task_robot >= 0)
-        fleet = self._fleet
-        return Schedule(
-            positions=fleet.positions(),
-            tasks=self.tasks[served].copy(),
-            task_robot=self.task_robot[served].copy(),
-            task_arrival=self.task_arrival[served].astype(np.int64),
-            task_assigned=self.task_assigned[served].astype(np.int64),
-            task_pickup=fleet.task_pickup[served].copy(),
-            task_delivered=fleet.task_delivered[served].copy(),
-        )
+        return self._executor.schedule()
 
     # ------------------------------------------------------------------ results
     def metrics(self) -> EpisodeMetrics:
@@ -513,18 +466,4 @@ class WarehouseSim:
             self.task_finished,
             self.robot_busy,
             self.decisions,
-        )
-
-
-def _check_whole_seconds(config: SimConfig, navigator: str) -> None:
-    """Collision-aware navigators plan in whole seconds: no completion noise, integer starts."""
-    if config.noise_mean != 0 or config.noise_var != 0:
-        raise ConfigError(
-            f"navigator {navigator!r} plans paths in whole seconds and times tasks by them: "
-            f"set env.noise_mean=0 env.noise_var=0 (got {config.noise_mean}, {config.noise_var})"
-        )
-    times = config.robot_free_times or ()
-    if any(t != int(t) for t in times):
-        raise ConfigError(
-            f"navigator {navigator!r} needs whole-second env.robot_free_times, got {list(times)}"
         )

@@ -18,25 +18,21 @@ Robots move one cell per second, so distances are travel times in seconds.
     small compiled kernel and kept in an LRU cache; paths are recovered by descending
     the field. A pair of cells in different connected regions is an error.
 
-Robots of these two navigators move independently (they pass through each other).
-The collision-aware navigators ``sipp`` and ``cbs`` (:mod:`rtaw_marl.sim.path_navigators`)
-measure distances as ``astar`` does but execute tasks on a shared grid.
+Navigators are distance models only. How robots then travel (independently, or on a
+shared grid where they wait for each other: ``sipp``, ``cbs``, which measure distances
+with ``astar``) is the simulator's :class:`~rtaw_marl.sim.execution.Executor`.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections import OrderedDict
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim._bfs import bfs_fields
 from rtaw_marl.sim.layout import Layout
-
-if TYPE_CHECKING:
-    from rtaw_marl.sim.fleet import Fleet
 
 __all__ = ["AStarNavigator", "DirectNavigator", "Navigator", "TargetSlots"]
 
@@ -87,15 +83,6 @@ class Navigator(ABC):
     @abstractmethod
     def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
         """Cells ``int64 [L, 2]`` visited from ``a`` to ``b``, both ends included."""
-
-    def make_fleet(self, num_robots: int) -> Fleet | None:
-        """The collision-aware executor of this navigator's episodes.
-
-        ``None`` (the default) means robots move independently and a task's TTD is the
-        distance to its origin; ``sipp`` and ``cbs`` return a :class:`Fleet`.
-        """
-        del num_robots
-        return None
 
     def check_connected(self, cells: np.ndarray, what: str) -> None:
         """Raise :class:`LayoutError` unless all ``cells [K, 2]`` are mutually reachable.

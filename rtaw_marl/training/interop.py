@@ -10,8 +10,8 @@ native env is the fast route.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
-from typing import Any
 
 from tensordict import TensorDictBase
 from tensordict.utils import NestedKey
@@ -19,6 +19,7 @@ from torchrl.envs import PettingZooWrapper
 from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 
 from rtaw_marl.envs.pettingzoo import env as warehouse_env
+from rtaw_marl.sim.builder import SimSpec
 
 __all__ = ["BATCHED_KEYS", "INTEROP_KEYS", "TrainKeys", "acting_reward", "make_interop_env"]
 
@@ -71,16 +72,15 @@ INTEROP_KEYS = TrainKeys(
 )
 
 
-def make_interop_env(spec: dict[str, Any], seed: int) -> PettingZooWrapper:
+def make_interop_env(spec: SimSpec, seed: int) -> PettingZooWrapper:
     """The AEC warehouse env in a ``PettingZooWrapper``, all robots in one group.
 
     Args:
-        spec: ``{"env": {...}, "layout": ..., "navigator": ..., "tasks": ...}``.
+        spec: The simulator spec.
         seed: Seed of the first reset.
     """
-    aec = warehouse_env(
-        **spec["env"], layout=spec["layout"], navigator=spec["navigator"], tasks=spec["tasks"]
-    )
+    env_keys = {f.name: getattr(spec.env, f.name) for f in dataclasses.fields(spec.env)}
+    aec = warehouse_env(layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks, **env_keys)
     return PettingZooWrapper(
         aec, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=seed
     )

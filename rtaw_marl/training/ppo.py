@@ -1,8 +1,10 @@
 """PPO training of the shared RTAW policy with TorchRL, readable top to bottom.
 
-build envs -> actor/critic -> ClipPPOLoss + GAE -> for each collected batch: GAE under
-no_grad, ``epochs`` passes of shuffled minibatches, weight sync to the collector,
-periodic greedy evaluation against MPDM on fixed seeds, checkpoints (last and best).
+:func:`train` builds the learner (networks, ClipPPOLoss, GAE, Adam), the collector over
+batched simulators and the evaluator, then loops: for each collected batch, GAE under
+``no_grad``, ``epochs`` passes of shuffled minibatches, weight sync to the collector,
+and every ``eval.every_frames`` a greedy evaluation against MPDM on the selection seeds
+with checkpoints (last and best).
 """
 
 from __future__ import annotations
@@ -11,11 +13,9 @@ import time
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import torch
-from omegaconf import DictConfig, OmegaConf
 from tensordict import TensorDictBase
 from torchrl.collectors import Collector, MultiSyncCollector
 from torchrl.data import LazyTensorStorage, SamplerWithoutReplacement, TensorDictReplayBuffer
@@ -28,9 +28,10 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.checkpoint import build_networks, load_checkpoint, save_checkpoint
-from rtaw_marl.models.rtaw import RTAWActor
+from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
 from rtaw_marl.policies import MPDM
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.training.config import PPOConfig, TrainConfig
 from rtaw_marl.training.interop import (
     BATCHED_KEYS,
     INTEROP_KEYS,
@@ -39,6 +40,7 @@ from rtaw_marl.training.interop import (
     make_interop_env,
 )
 from rtaw_marl.training.logging import RunLogger
+from rtaw_marl.utils.plain import as_plain
 from rtaw_marl.viz.plots import plot_training_curve
 
 __all__ = ["TrainResult", "greedy_ttd", "train"]
@@ -57,13 +59,247 @@ class TrainResult:
     history: list[dict[str, float]] = field(default_factory=list)
 
 
-def _env_spec(cfg: DictConfig) -> dict[str, Any]:
-    return {
-        "env": OmegaConf.to_container(cfg.env, resolve=True, throw_on_missing=True),
-        "layout": OmegaConf.to_container(cfg.layout, resolve=True, throw_on_missing=True),
-        "navigator": str(cfg.navigator.name),
-        "tasks": OmegaConf.to_container(cfg.tasks, resolve=True, throw_on_missing=True),
+@dataclass
+class Learner:
+    """The networks and what updates them."""
+
+    actor_net: RTAWActor
+    critic_net: RTAWCritic
+    loss: ClipPPOLoss
+    gae: GAE
+    optim: torch.optim.Optimizer
+
+
+@dataclass
+class Progress:
+    """Where a run stands (restored on resume)."""
+
+    frames: int = 0
+    iteration: int = 0
+    best_ttd: float = float("inf")
+
+
+def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
+    """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``."""
+    _check(cfg)
+    run_dir = Path(run_dir)
+    last_path, best_path = run_dir / "checkpoints" / "last.pt", run_dir / "checkpoints" / "best.pt"
+    if last_path.exists() and not cfg.resume:
+        raise ConfigError(
+            f"{run_dir} already holds a training run; pass resume={last_path} "
+            "to continue it, or choose another output_dir"
+        )
+    torch.manual_seed(cfg.seed)
+    torch.set_num_threads(int(cfg.torch_threads))
+    spec = SimSpec.of(cfg.env, cfg.layout, cfg.navigator, cfg.tasks)
+    keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
+    learner = build_learner(cfg, keys)
+    progress = _resume(cfg, learner) if cfg.resume else Progress()
+    evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds])
+    collector = build_collector(cfg, spec, learner, keys, progress)
+    buffer = TensorDictReplayBuffer(
+        storage=LazyTensorStorage(cfg.algo.frames_per_batch),
+        sampler=SamplerWithoutReplacement(),
+        batch_size=cfg.algo.minibatch_size,
+    )
+    logger = RunLogger(run_dir, cfg.logger)
+    reward_scale = cfg.algo.reward_scale or 1.0 / evaluator.env.scale
+    bar = tqdm(total=cfg.frames, initial=progress.frames, unit="fr", disable=not cfg.progress)
+    start = time.perf_counter()
+
+    def evaluate_and_save() -> None:
+        row = evaluator.run(learner.actor_net, progress, time.perf_counter() - start)
+        logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
+        bar.set_postfix(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
+        payload = _checkpoint_payload(cfg, learner, progress, row)
+        save_checkpoint(last_path, payload)
+        if row["ttd"] <= progress.best_ttd:
+            save_checkpoint(best_path, payload)
+
+    next_eval = progress.frames + cfg.eval.every_frames
+    try:
+        if progress.frames == 0:
+            evaluate_and_save()
+        for data in collector:
+            progress.frames += data.numel()
+            progress.iteration += 1
+            stats = _train_step(cfg, learner, buffer, data, keys, reward_scale, progress)
+            collector.update_policy_weights_()
+            bar.update(data.numel())
+            stats["charts/fps"] = progress.frames / (time.perf_counter() - start)
+            logger.log(stats, progress.frames)
+            done = progress.frames >= cfg.frames
+            if progress.frames >= next_eval or done:
+                next_eval += cfg.eval.every_frames
+                evaluate_and_save()
+            if done:
+                break
+    finally:
+        collector.shutdown()
+        bar.close()
+        logger.close()
+    plot_training_curve(evaluator.history, run_dir / "training_curve.png")
+    return TrainResult(
+        run_dir,
+        last_path,
+        best_path,
+        progress.frames,
+        evaluator.mpdm_ttd,
+        progress.best_ttd,
+        evaluator.history,
+    )
+
+
+# --------------------------------------------------------------------------- building
+def _check(cfg: TrainConfig) -> None:
+    algo = cfg.algo
+    if algo.frames_per_batch % algo.minibatch_size:
+        raise ConfigError(
+            f"algo.frames_per_batch={algo.frames_per_batch} must be a multiple of "
+            f"algo.minibatch_size={algo.minibatch_size}"
+        )
+    per_collect = cfg.collector.workers * (1 if cfg.interop else cfg.collector.envs_per_worker)
+    if algo.frames_per_batch % per_collect:
+        raise ConfigError(
+            f"algo.frames_per_batch={algo.frames_per_batch} must be a multiple of "
+            f"collector.workers * collector.envs_per_worker = {per_collect}"
+        )
+    if cfg.interop and cfg.collector.workers != 1:
+        raise ConfigError("interop=true runs one PettingZooWrapper env: set collector.workers=1")
+    if cfg.frames < algo.frames_per_batch:
+        raise ConfigError(f"frames={cfg.frames} is less than one batch ({algo.frames_per_batch})")
+
+
+def build_learner(cfg: TrainConfig, keys: TrainKeys) -> Learner:
+    """Actor and critic networks, the ClipPPO loss on explicit keys, GAE and Adam."""
+    algo = cfg.algo
+    actor_net, critic_net = build_networks(cfg.model)
+    actor = make_actor(actor_net, keys.observation)
+    critic = make_critic(critic_net, keys.observation)
+    loss = ClipPPOLoss(
+        actor,
+        critic,
+        clip_epsilon=algo.clip_epsilon,
+        entropy_coeff=algo.entropy_coeff_start,
+        critic_coeff=algo.critic_coeff,
+        loss_critic_type="smooth_l1",
+        normalize_advantage=algo.normalize_advantage,
+    )
+    shared_keys = {
+        "value": keys.value,
+        "reward": keys.reward,
+        "done": keys.done,
+        "terminated": keys.terminated,
+        "advantage": keys.advantage,
+        "value_target": keys.value_target,
     }
+    loss.set_keys(action=keys.action, sample_log_prob=keys.log_prob, **shared_keys)
+    # Interop route: only the acting robot's row of each step counts in the loss.
+    loss.loss_mask_key = keys.loss_mask
+    gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic)
+    gae.set_keys(**shared_keys)
+    optim = torch.optim.Adam(loss.parameters(), lr=algo.lr)
+    return Learner(actor_net, critic_net, loss, gae, optim)
+
+
+def build_collector(
+    cfg: TrainConfig, spec: SimSpec, learner: Learner, keys: TrainKeys, progress: Progress
+) -> Collector | MultiSyncCollector:
+    """One collector over ``collector.workers`` processes of batched simulators."""
+    workers, envs = cfg.collector.workers, cfg.collector.envs_per_worker
+    iteration = progress.iteration
+    # Env seeds depend on the resume point, so a resumed run sees new episodes.
+    seeds = [cfg.seed * 1009 + 31 * w + iteration for w in range(workers)]
+    if cfg.interop:
+        make_env = [partial(make_interop_env, spec, seed) for seed in seeds]
+    else:
+        make_env = [partial(BatchedWarehouseEnv, spec, envs, seed) for seed in seeds]
+    batch = cfg.algo.frames_per_batch
+    remaining = max(cfg.frames - progress.frames, batch)
+    kwargs = {
+        "frames_per_batch": batch,
+        "total_frames": -(-remaining // batch) * batch,
+        "auto_register_policy_transforms": False,
+    }
+    actor = learner.loss.actor_network
+    if workers == 1:
+        collector = Collector(make_env[0], actor, **kwargs)
+    else:
+        collector = MultiSyncCollector(make_env, actor, **kwargs)
+    collector.set_seed(cfg.seed + iteration)
+    return collector
+
+
+def _resume(cfg: TrainConfig, learner: Learner) -> Progress:
+    ckpt = load_checkpoint(cfg.resume)
+    model_cfg = _plain_model(cfg)
+    if ckpt["model_config"] != model_cfg:
+        raise ConfigError(
+            f"resume: checkpoint model {ckpt['model_config']} differs from model {model_cfg}"
+        )
+    learner.actor_net.load_state_dict(ckpt["model"]["actor"])
+    learner.critic_net.load_state_dict(ckpt["model"]["critic"])
+    learner.optim.load_state_dict(ckpt["optimizer"])
+    progress = Progress(
+        int(ckpt["frames"]), int(ckpt["iteration"]), float(ckpt.get("best_ttd", float("inf")))
+    )
+    torch.manual_seed(cfg.seed + progress.iteration)
+    return progress
+
+
+def _plain_model(cfg: TrainConfig) -> dict[str, int]:
+    model = as_plain(cfg.model)
+    model.pop("name", None)  # checkpoints since the first release store the sizes only
+    return model
+
+
+def _checkpoint_payload(
+    cfg: TrainConfig, learner: Learner, progress: Progress, row: dict[str, float]
+) -> dict:
+    return {
+        "model": {
+            "actor": learner.actor_net.state_dict(),
+            "critic": learner.critic_net.state_dict(),
+        },
+        "model_config": _plain_model(cfg),
+        "optimizer": learner.optim.state_dict(),
+        "config": as_plain(cfg),
+        "frames": progress.frames,
+        "iteration": progress.iteration,
+        "best_ttd": progress.best_ttd,
+        "eval": row,
+    }
+
+
+# --------------------------------------------------------------------------- evaluation
+class Evaluator:
+    """Greedy evaluation on fixed selection seeds, in lockstep, against MPDM.
+
+    Args:
+        spec: The simulator spec.
+        seeds: Selection seeds (never the evaluation seeds 0-19).
+    """
+
+    def __init__(self, spec: SimSpec, seeds: list[int]) -> None:
+        self.seeds = seeds
+        self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0)
+        mpdm = evaluate(build_sim(spec), {"mpdm": MPDM()}, seeds)["mpdm"]["ttd"]
+        self.mpdm_ttd = float(np.mean(mpdm))
+        self.history: list[dict[str, float]] = []
+
+    def run(self, net: RTAWActor, progress: Progress, wall_s: float) -> dict[str, float]:
+        """Evaluate ``net``, update ``progress.best_ttd`` and return the logged row."""
+        ttd = float(np.mean(greedy_ttd(net, self.env, self.seeds)))
+        progress.best_ttd = min(progress.best_ttd, ttd)
+        row = {
+            "frames": progress.frames,
+            "ttd": ttd,
+            "mpdm_ttd": self.mpdm_ttd,
+            "improvement_pct": 100.0 * (self.mpdm_ttd - ttd) / self.mpdm_ttd,
+            "wall_s": wall_s,
+        }
+        self.history.append(row)
+        return row
 
 
 @torch.no_grad()
@@ -87,227 +323,53 @@ def greedy_ttd(net: RTAWActor, env: BatchedWarehouseEnv, seeds: list[int]) -> li
     return [env.sims[i].metrics().ttd for i in range(len(seeds))]
 
 
-def _check(cfg: DictConfig) -> None:
+# --------------------------------------------------------------------------- update
+def _train_step(
+    cfg: TrainConfig,
+    learner: Learner,
+    buffer: TensorDictReplayBuffer,
+    data: TensorDictBase,
+    keys: TrainKeys,
+    reward_scale: float,
+    progress: Progress,
+) -> dict[str, float]:
+    """Anneal the entropy coefficient, then one PPO update; returns the logged scalars."""
     algo = cfg.algo
-    if algo.frames_per_batch % algo.minibatch_size:
-        raise ConfigError(
-            f"algo.frames_per_batch={algo.frames_per_batch} must be a multiple of "
-            f"algo.minibatch_size={algo.minibatch_size}"
-        )
-    per_collect = cfg.collector.workers * (1 if cfg.interop else cfg.collector.envs_per_worker)
-    if algo.frames_per_batch % per_collect:
-        raise ConfigError(
-            f"algo.frames_per_batch={algo.frames_per_batch} must be a multiple of "
-            f"collector.workers * collector.envs_per_worker = {per_collect}"
-        )
-    if cfg.interop and cfg.collector.workers != 1:
-        raise ConfigError("interop=true runs one PettingZooWrapper env: set collector.workers=1")
-    if cfg.frames < algo.frames_per_batch:
-        raise ConfigError(f"frames={cfg.frames} is less than one batch ({algo.frames_per_batch})")
-
-
-def train(cfg: DictConfig, run_dir: str | Path) -> TrainResult:
-    """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``."""
-    _check(cfg)
-    run_dir = Path(run_dir)
-    ckpt_dir = run_dir / "checkpoints"
-    if (ckpt_dir / "last.pt").exists() and not cfg.resume:
-        raise ConfigError(
-            f"{run_dir} already holds a training run; pass resume={ckpt_dir / 'last.pt'} "
-            "to continue it, or choose another output_dir"
-        )
-    algo = cfg.algo
-    torch.manual_seed(cfg.seed)
-    torch.set_num_threads(int(cfg.torch_threads))
-    spec = _env_spec(cfg)
-
-    # --- networks, loss, optimiser ------------------------------------------------
-    keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
-    model_cfg = OmegaConf.to_container(cfg.model, resolve=True)
-    actor_net, critic_net = build_networks(model_cfg)
-    actor, critic = (
-        make_actor(actor_net, keys.observation),
-        make_critic(critic_net, keys.observation),
+    fraction = min(1.0, progress.frames / cfg.frames)
+    entropy_coeff = algo.entropy_coeff_start + fraction * (
+        algo.entropy_coeff_end - algo.entropy_coeff_start
     )
-    loss_module = ClipPPOLoss(
-        actor,
-        critic,
-        clip_epsilon=algo.clip_epsilon,
-        entropy_coeff=algo.entropy_coeff_start,
-        critic_coeff=algo.critic_coeff,
-        loss_critic_type="smooth_l1",
-        normalize_advantage=algo.normalize_advantage,
-    )
-    shared_keys = {
-        "value": keys.value,
-        "reward": keys.reward,
-        "done": keys.done,
-        "terminated": keys.terminated,
-        "advantage": keys.advantage,
-        "value_target": keys.value_target,
-    }
-    loss_module.set_keys(action=keys.action, sample_log_prob=keys.log_prob, **shared_keys)
-    # Interop route: only the acting robot's row of each step counts in the loss.
-    loss_module.loss_mask_key = keys.loss_mask
-    gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic)
-    gae.set_keys(**shared_keys)
-    optim = torch.optim.Adam(loss_module.parameters(), lr=algo.lr)
-
-    frames_done, iteration, best_ttd = 0, 0, float("inf")
-    if cfg.resume:
-        ckpt = load_checkpoint(cfg.resume)
-        if ckpt["model_config"] != model_cfg:
-            raise ConfigError(
-                f"resume: checkpoint model {ckpt['model_config']} differs from model {model_cfg}"
-            )
-        actor_net.load_state_dict(ckpt["model"]["actor"])
-        critic_net.load_state_dict(ckpt["model"]["critic"])
-        optim.load_state_dict(ckpt["optimizer"])
-        frames_done, iteration = int(ckpt["frames"]), int(ckpt["iteration"])
-        best_ttd = float(ckpt.get("best_ttd", float("inf")))
-        torch.manual_seed(cfg.seed + iteration)
-
-    # --- evaluation reference: MPDM on the same seeds --------------------------------
-    eval_seeds = [int(s) for s in cfg.eval.seeds]
-    eval_env = BatchedWarehouseEnv(**spec, num_envs=len(eval_seeds), seed=0)
-    mpdm_sim = build_sim(spec["env"], spec["layout"], spec["navigator"], spec["tasks"])
-    mpdm_ttd = float(np.mean(evaluate(mpdm_sim, {"mpdm": MPDM()}, eval_seeds)["mpdm"]["ttd"]))
-
-    # --- collector ------------------------------------------------------------------
-    workers, envs = int(cfg.collector.workers), int(cfg.collector.envs_per_worker)
-    # Env seeds depend on the resume point, so a resumed run sees new episodes.
-    seeds = [int(cfg.seed) * 1009 + 31 * w + iteration for w in range(workers)]
-    if cfg.interop:
-        make_env = [partial(make_interop_env, spec, seed) for seed in seeds]
-    else:
-        make_env = [
-            partial(BatchedWarehouseEnv, **spec, num_envs=envs, seed=seed) for seed in seeds
-        ]
-    batch = int(algo.frames_per_batch)
-    remaining = max(int(cfg.frames) - frames_done, batch)
-    collector_kwargs = {
-        "frames_per_batch": batch,
-        "total_frames": -(-remaining // batch) * batch,
-        "auto_register_policy_transforms": False,
-    }
-    if workers == 1:
-        collector = Collector(make_env[0], actor, **collector_kwargs)
-    else:
-        collector = MultiSyncCollector(make_env, actor, **collector_kwargs)
-    collector.set_seed(int(cfg.seed) + iteration)
-
-    buffer = TensorDictReplayBuffer(
-        storage=LazyTensorStorage(int(algo.frames_per_batch)),
-        sampler=SamplerWithoutReplacement(),
-        batch_size=int(algo.minibatch_size),
-    )
-    logger = RunLogger(run_dir, cfg.logger)
-    history: list[dict[str, float]] = []
-    last_path, best_path = ckpt_dir / "last.pt", ckpt_dir / "best.pt"
-    reward_scale = float(algo.reward_scale) if algo.reward_scale else 1.0 / eval_env.scale
-    next_eval = frames_done + int(cfg.eval.every_frames)
-    bar = tqdm(total=int(cfg.frames), initial=frames_done, unit="fr", disable=not cfg.progress)
-    postfix: dict[str, str] = {}  # mean reward per decision, latest eval TTD, MPDM's TTD
-    start = time.perf_counter()
-
-    def checkpoint(eval_row: dict[str, float]) -> None:
-        payload = {
-            "model": {"actor": actor_net.state_dict(), "critic": critic_net.state_dict()},
-            "model_config": model_cfg,
-            "optimizer": optim.state_dict(),
-            "config": OmegaConf.to_container(cfg, resolve=True),
-            "frames": frames_done,
-            "iteration": iteration,
-            "best_ttd": best_ttd,
-            "eval": eval_row,
-        }
-        save_checkpoint(last_path, payload)
-        if eval_row.get("ttd", float("inf")) <= best_ttd:
-            save_checkpoint(best_path, payload)
-
-    def run_eval() -> dict[str, float]:
-        nonlocal best_ttd
-        ttd = float(np.mean(greedy_ttd(actor_net, eval_env, eval_seeds)))
-        best_ttd = min(best_ttd, ttd)
-        row = {
-            "frames": frames_done,
-            "ttd": ttd,
-            "mpdm_ttd": mpdm_ttd,
-            "improvement_pct": 100.0 * (mpdm_ttd - ttd) / mpdm_ttd,
-            "wall_s": time.perf_counter() - start,
-        }
-        history.append(row)
-        logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, frames_done)
-        postfix.update(eval_ttd=f"{ttd:.0f}", mpdm_ttd=f"{mpdm_ttd:.0f}")
-        bar.set_postfix(postfix)
-        return row
-
-    try:
-        if frames_done == 0:
-            checkpoint(run_eval())
-        for data in collector:
-            frames_done += data.numel()
-            iteration += 1
-            progress = min(1.0, frames_done / int(cfg.frames))
-            entropy_coeff = algo.entropy_coeff_start + progress * (
-                algo.entropy_coeff_end - algo.entropy_coeff_start
-            )
-            loss_module.entropy_coeff.fill_(entropy_coeff)
-            raw_reward = acting_reward(data, keys)
-            stats = _update(data, gae, loss_module, optim, buffer, algo, reward_scale, keys)
-            collector.update_policy_weights_()
-            postfix["reward"] = f"{raw_reward:.2f}"
-            bar.set_postfix(postfix, refresh=False)
-            bar.update(data.numel())
-            logger.log(
-                {
-                    "train/reward_mean": raw_reward,
-                    "train/entropy_coeff": entropy_coeff,
-                    "charts/fps": frames_done / (time.perf_counter() - start),
-                    **stats,
-                },
-                frames_done,
-            )
-            if frames_done >= next_eval or frames_done >= int(cfg.frames):
-                next_eval += int(cfg.eval.every_frames)
-                checkpoint(run_eval())
-            if frames_done >= int(cfg.frames):
-                break
-    finally:
-        collector.shutdown()
-        bar.close()
-        logger.close()
-    plot_training_curve(history, run_dir / "training_curve.png")
-    return TrainResult(run_dir, last_path, best_path, frames_done, mpdm_ttd, best_ttd, history)
+    learner.loss.entropy_coeff.fill_(entropy_coeff)
+    raw_reward = acting_reward(data, keys)
+    stats = _update(data, learner, buffer, algo, reward_scale, keys)
+    return {"train/reward_mean": raw_reward, "train/entropy_coeff": entropy_coeff, **stats}
 
 
 def _update(
     data: TensorDictBase,
-    gae: GAE,
-    loss_module: ClipPPOLoss,
-    optim: torch.optim.Optimizer,
+    learner: Learner,
     buffer: TensorDictReplayBuffer,
-    algo: DictConfig,
+    algo: PPOConfig,
     reward_scale: float,
     keys: TrainKeys,
 ) -> dict[str, float]:
     """One PPO update on a collected batch ``[..., T]``: GAE, then epochs of minibatches."""
     data["next", keys.reward] = data["next", keys.reward] * reward_scale
     with torch.no_grad():
-        gae(data)
+        learner.gae(data)
     buffer.extend(data.reshape(-1))
     totals = {"losses/objective": 0.0, "losses/critic": 0.0, "losses/entropy": 0.0}
     steps = 0
-    for _ in range(int(algo.epochs)):
+    for _ in range(algo.epochs):
         for batch in buffer:
-            out = loss_module(batch)
+            out = learner.loss(batch)
             loss = (
                 algo.policy_coeff * out["loss_objective"] + out["loss_critic"] + out["loss_entropy"]
             )
-            optim.zero_grad()
+            learner.optim.zero_grad()
             loss.backward()
-            torch.nn.utils.clip_grad_norm_(loss_module.parameters(), algo.max_grad_norm)
-            optim.step()
+            torch.nn.utils.clip_grad_norm_(learner.loss.parameters(), algo.max_grad_norm)
+            learner.optim.step()
             totals["losses/objective"] += out["loss_objective"].item()
             totals["losses/critic"] += out["loss_critic"].item()
             totals["losses/entropy"] += out["loss_entropy"].item()

@@ -1,4 +1,4 @@
-"""Animated GIF of an executed episode (a :class:`~rtaw_marl.sim.schedule.Schedule`).
+"""Animated GIF of an executed episode (a :class:`~rtaw_marl.sim.mapf.schedule.Schedule`).
 
 One frame per drawn time step ``t``. Legend:
 
@@ -35,7 +35,7 @@ from PIL import Image, ImageDraw, ImageFont, features
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = ["BASE_COLORS", "HEADER_PX", "ROBOT_COLORS", "render_gif", "robot_color"]

@@ -7,11 +7,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from hydra import compose, initialize_config_dir
 from PIL import Image
 
-from rtaw_marl.cli import CONF_DIR
 from rtaw_marl.cli.render import run
+from rtaw_marl.config import compose
 
 RTAW_RENDER = Path(sys.executable).with_name("rtaw-render")
 
@@ -24,8 +23,7 @@ def test_render_writes_a_checked_gif(navigator: str, tmp_path: Path) -> None:
         f"navigator={navigator}", "layout=A", "env.num_tasks=6", "policy=rtaw",
         "pretrained=A_astar_m10", f"output={out}", "every=2",
     ]  # fmt: skip
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        cfg = compose(config_name="render", overrides=overrides)
+    cfg = compose(config_name="render", overrides=overrides)
     assert run(cfg) == out
     with Image.open(out) as gif:
         frames = gif.n_frames
@@ -38,17 +36,27 @@ def test_render_writes_a_checked_gif(navigator: str, tmp_path: Path) -> None:
     ("args", "message"),
     [
         (["navigator=astar"], "render with navigator=sipp or navigator=cbs"),
-        (["policy=[mpdm,rbts]"], "policy must name one policy"),
+        (["policy=[mpdm,rbts]"], "config key 'policy'"),
         (["output=out.png"], "must end in .gif"),
         (["max_frames=3"], "max_frames"),
     ],
 )
-def test_render_errors_are_one_line(args: list[str], message: str, tmp_path: Path) -> None:
+def test_render_errors_are_one_line(args: list[str], message: str, cli) -> None:
+    result = cli("render", "env.num_tasks=4", *args)
+    assert result.code == 2
+    assert message in result.err
+    assert len(result.err.strip().splitlines()) == 1
+    assert "Traceback" not in result.err + result.out
+
+
+def test_render_console_script_error_end_to_end(tmp_path: Path) -> None:
+    """The installed console script: exit 2 and one line, in a fresh interpreter."""
     proc = subprocess.run(
-        [str(RTAW_RENDER), "env.num_tasks=4", *args], cwd=tmp_path, capture_output=True,
-        text=True, timeout=300,
+        [str(RTAW_RENDER), "navigator=astar"], cwd=tmp_path, capture_output=True, text=True,
+        timeout=300,
     )  # fmt: skip
     assert proc.returncode == 2
-    assert message in proc.stderr
-    assert len(proc.stderr.strip().splitlines()) == 1
-    assert "Traceback" not in proc.stderr + proc.stdout
+    assert proc.stderr.strip() == (
+        "error: navigator=astar moves robots independently (they pass through each other); "
+        "render with navigator=sipp or navigator=cbs"
+    )

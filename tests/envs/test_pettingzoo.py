@@ -23,7 +23,7 @@ import rtaw_marl
 from rtaw_marl import warehouse_v0
 from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS
-from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.sim.mapf.conflicts import check_schedule
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 MAPS_DIR = REPO_ROOT.parent / "shared" / "maps"
@@ -559,7 +559,7 @@ def test_none_action_for_live_agent_and_action_for_dead_agent_raise() -> None:
         ({"layout": "maze"}, ConfigError, ["layout", "'maze'", "open", "shelves"]),
         ({"layout": {"name": "mazes"}}, ConfigError, ["layout", "'mazes'"]),
         ({"layout": {"name": "open", "depth": 3}}, ConfigError, ["depth", "width"]),
-        ({"tasks": "teleport"}, ConfigError, ["task stream", "'teleport'", "designated"]),
+        ({"tasks": "teleport"}, ConfigError, ["tasks", "'teleport'", "designated"]),
         ({"tasks": {"name": "random", "rate": 2}}, ConfigError, ["rate"]),
         ({"layout": "/nonexistent/dir/missing.cfg"}, LayoutError, ["not found", "missing.cfg"]),
         (

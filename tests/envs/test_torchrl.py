@@ -12,16 +12,14 @@ from torchrl.envs.utils import check_env_specs
 from rtaw_marl import warehouse_v0
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import InvalidActionError
+from rtaw_marl.sim.builder import SimSpec
 
 SMALL = {"num_robots": 4, "num_tasks": 12, "queue_len": 3}
 
 
 def _env(num_envs: int = 3, seed: int = 0, **env) -> BatchedWarehouseEnv:
     return BatchedWarehouseEnv(
-        {**SMALL, **env},
-        {"name": "open", "width": 12, "height": 9},
-        "astar",
-        "random",
+        SimSpec.of({**SMALL, **env}, {"name": "open", "width": 12, "height": 9}, "astar", "random"),
         num_envs=num_envs,
         seed=seed,
     )
@@ -42,7 +40,7 @@ def test_check_env_specs(mode: str) -> None:
 def test_same_trajectory_as_aec_env(layout, navigator: str, tasks: str, mode: str) -> None:
     """Same seed and same actions: bit-identical observations, rewards and TTD."""
     env_cfg = {"num_robots": 5, "num_tasks": 25, "queue_len": 4, "episode_mode": mode}
-    batched = BatchedWarehouseEnv(env_cfg, layout, navigator, tasks, num_envs=2, seed=3)
+    batched = BatchedWarehouseEnv(SimSpec.of(env_cfg, layout, navigator, tasks), num_envs=2, seed=3)
     td = batched.reset()
     rng = np.random.default_rng(0)
     aecs = []

@@ -6,15 +6,14 @@ import json
 from pathlib import Path
 
 import pytest
-from hydra import compose, initialize_config_dir
 
-from rtaw_marl.cli import CONF_DIR
 from rtaw_marl.cli.eval import run
+from rtaw_marl.config import compose
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.tasks import FixedTasks
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
@@ -29,9 +28,9 @@ from tests.training.conftest import POC_ENV, POC_LAYOUT
 )
 @pytest.mark.parametrize("robots", [1, 4])
 def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots: int) -> None:
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": robots, "num_tasks": 40, "queue_len": 5}, layout, navigator, tasks
-    )
+    ).build()
     policies = {
         name: make_baseline(name, sim.navigator, sim.layout.scale)
         for name in ("mpdm", "rbts", "random")
@@ -46,24 +45,24 @@ def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots:
 
 
 def test_bound_below_poc_optimum() -> None:
-    sim = build_sim(
+    sim = SimSpec.of(
         POC_ENV,
         POC_LAYOUT,
         "direct",
         "poc",
-    )
+    ).build()
     assert ttd_lower_bound(sim, 0) <= 17.936
 
 
 def test_bound_is_tight_on_a_chain() -> None:
     """One robot, tasks laid end to end: every policy's TTD (2) equals the bound."""
     tasks = FixedTasks([[1, 0, 2, 0], [3, 0, 4, 0]])
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 1, "num_tasks": 2, "queue_len": 1, "robot_starts": [[0, 0]]},
         {"name": "open", "width": 6, "height": 1},
         "astar",
         tasks,
-    )
+    ).build()
     assert ttd_lower_bound(sim, 0) == 2.0
     sim.reset(0)
     assert -(sim.step(0) + sim.step(0)) == 2.0
@@ -72,30 +71,30 @@ def test_bound_is_tight_on_a_chain() -> None:
 def test_a_task_never_follows_itself() -> None:
     """A single task whose destination is next to its origin still pays the robot's travel."""
     tasks = FixedTasks([[5, 0, 4, 0]])
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 1, "num_tasks": 1, "queue_len": 1, "robot_starts": [[0, 0]]},
         {"name": "open", "width": 6, "height": 1},
         "astar",
         tasks,
-    )
+    ).build()
     assert ttd_lower_bound(sim, 0) == 5.0
 
 
 def test_paper_mode_is_rejected() -> None:
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 2, "num_tasks": 10, "episode_mode": "paper"}, "open", "direct", "random"
-    )
+    ).build()
     with pytest.raises(ConfigError, match="drain"):
         ttd_lower_bound(sim, 0)
 
 
 def test_scales_to_5000_tasks() -> None:
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 1000, "num_tasks": 5000},
         {"name": "open", "width": 300, "height": 300},
         "direct",
         "random",
-    )
+    ).build()
     bound = ttd_lower_bound(sim, 0)
     metrics = evaluate(sim, {"mpdm": make_baseline("mpdm")}, [0])
     assert 0 < bound <= metrics["mpdm"]["ttd"][0]
@@ -103,17 +102,16 @@ def test_scales_to_5000_tasks() -> None:
 
 def test_rtaw_eval_reports_bound_and_gaps(tmp_path: Path) -> None:
     out = tmp_path / "r.json"
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        cfg = compose(
-            config_name="eval",
-            overrides=[
-                "env.num_tasks=60",
-                "policy=[mpdm,rbts]",
-                "seeds=[0,1]",
-                f"output={out}",
-                "progress=false",
-            ],
-        )
+    cfg = compose(
+        config_name="eval",
+        overrides=[
+            "env.num_tasks=60",
+            "policy=[mpdm,rbts]",
+            "seeds=[0,1]",
+            f"output={out}",
+            "progress=false",
+        ],
+    )
     run(cfg)
     data = json.loads(out.read_text())
     assert len(data["lower_bound"]) == 2

@@ -6,7 +6,9 @@ import pytest
 import torch
 from tensordict import TensorDict
 
-from rtaw_marl.models import RTAWActor, RTAWCritic, make_actor, make_critic
+from rtaw_marl.models.actor_critic import make_actor, make_critic
+from rtaw_marl.models.checkpoint import build_networks
+from rtaw_marl.models.config import RTAWConfig
 
 
 def _state(batch: int, m: int, n: int, seed: int = 0) -> TensorDict:
@@ -31,7 +33,7 @@ def _args(td: TensorDict) -> tuple[torch.Tensor, ...]:
 def test_parameter_count_is_independent_of_m_and_n() -> None:
     """One network runs with 10, 100 and 1000 robots and 2..100 tasks; its size is fixed."""
     torch.manual_seed(0)
-    actor, critic = RTAWActor(), RTAWCritic()
+    actor, critic = build_networks(RTAWConfig())
     sizes = {sum(p.numel() for p in actor.parameters())}
     for m, n in [(10, 10), (100, 2), (1000, 100)]:
         td = _state(2, m, n)
@@ -49,7 +51,7 @@ def test_parameter_count_is_independent_of_m_and_n() -> None:
 
 def test_permuting_robots_leaves_output_unchanged() -> None:
     torch.manual_seed(1)
-    actor, critic = RTAWActor(), RTAWCritic()
+    actor, critic = build_networks(RTAWConfig())
     td = _state(3, 12, 7)
     perm = torch.randperm(12)
     shuffled = td.clone()
@@ -60,7 +62,7 @@ def test_permuting_robots_leaves_output_unchanged() -> None:
 
 def test_permuting_tasks_permutes_logits() -> None:
     torch.manual_seed(2)
-    actor, critic = RTAWActor(), RTAWCritic()
+    actor, critic = build_networks(RTAWConfig())
     td = _state(3, 5, 9)
     perm = torch.randperm(9)
     shuffled = td.clone()
@@ -73,7 +75,7 @@ def test_permuting_tasks_permutes_logits() -> None:
 def test_empty_slots_do_not_change_the_valid_logits() -> None:
     """Appending masked slots leaves the logits of the real tasks unchanged."""
     torch.manual_seed(3)
-    actor = RTAWActor()
+    actor = build_networks(RTAWConfig())[0]
     td = _state(2, 4, 3)
     td["action_mask"][:] = True
     padded = TensorDict(
@@ -90,7 +92,7 @@ def test_empty_slots_do_not_change_the_valid_logits() -> None:
 
 def test_masked_tasks_get_probability_zero() -> None:
     torch.manual_seed(4)
-    actor = make_actor(RTAWActor())
+    actor = make_actor(build_networks(RTAWConfig())[0])
     td = _state(64, 6, 8, seed=5)
     out = actor(td.clone())
     dist = actor.get_dist(td.clone())
@@ -102,14 +104,14 @@ def test_masked_tasks_get_probability_zero() -> None:
 
 
 def test_critic_wrapper_writes_state_value() -> None:
-    critic = make_critic(RTAWCritic())
+    critic = make_critic(build_networks(RTAWConfig())[1])
     out = critic(_state(4, 3, 5))
     assert out["state_value"].shape == (4, 1)
 
 
 @pytest.mark.parametrize("m", [1, 1000])
 def test_single_robot_and_many_robots(m: int) -> None:
-    actor = RTAWActor()
+    actor = build_networks(RTAWConfig())[0]
     logits = actor(*_args(_state(1, m, 1)))
     assert logits.shape == (1, 1)
     assert torch.isfinite(logits).all()

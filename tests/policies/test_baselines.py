@@ -18,10 +18,10 @@ from rtaw_marl.policies import (
     RandomPolicy,
     make_baseline,
 )
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.navigation import DirectNavigator
-from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.sim.tasks import FixedTasks
 
 #: The two observation-path settings: (navigator, layout spec).
@@ -46,18 +46,18 @@ def run_sim(sim: WarehouseSim, policy: BaselinePolicy, seed: int) -> tuple[list[
 
 def two_task_sim(num_tasks: int = 500) -> WarehouseSim:
     """The paper's two-task setting: 10 robots, 10x10 open grid, direct, paper mode."""
-    return build_sim(
+    return SimSpec.of(
         {"num_robots": 10, "num_tasks": num_tasks, "queue_len": 2, "episode_mode": "paper"},
         {"name": "open", "width": 10, "height": 10},
         "direct",
         "two_task",
-    )
+    ).build()
 
 
 def random_sim(navigator: str, layout: dict[str, Any], **env: Any) -> WarehouseSim:
     values: dict[str, Any] = {"num_robots": 4, "num_tasks": 60, "queue_len": 5}
     values.update(env)
-    return build_sim(values, layout, navigator, "random")
+    return SimSpec.of(values, layout, navigator, "random").build()
 
 
 # ----------------------------------------------------------------- MPDM

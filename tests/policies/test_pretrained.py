@@ -9,7 +9,7 @@ from rtaw_marl.evaluation import evaluate
 from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.builder import SimSpec
 
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
@@ -28,12 +28,12 @@ def test_pretrained_checkpoint_is_shipped_and_describes_itself(name: str) -> Non
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
 def test_pretrained_policy_runs_on_other_sizes(name: str) -> None:
     """Trained with 10 robots and 10 slots; runs with 30 robots and 4 slots on another grid."""
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 30, "num_tasks": 60, "queue_len": 4},
         {"name": "preset", "preset": "C", "width": 40, "height": 30},
         "astar",
         "random",
-    )
+    ).build()
     res = evaluate(sim, {"rtaw": load_policy(pretrained_path(name))}, [0])
     assert res["rtaw"]["tasks_served"] == [60]
 

@@ -12,10 +12,10 @@ import pytest
 from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS, RandomPolicy
 from rtaw_marl.policies.baselines import BaselinePolicy
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.navigation import AStarNavigator, DirectNavigator
-from rtaw_marl.sim.registry import build_sim
 from rtaw_marl.sim.tasks import TWO_TASKS, FixedTasks, RandomTasks
 
 SQRT18 = math.sqrt(18.0)
@@ -37,7 +37,9 @@ def small_sim(**overrides: object) -> WarehouseSim:
     """A 3-robot, 30-task random-task episode on a 12x12 open grid with the direct navigator."""
     values: dict[str, object] = {"num_robots": 3, "num_tasks": 30, "queue_len": 4}
     values.update(overrides)
-    return build_sim(values, {"name": "open", "width": 12, "height": 12}, "direct", "random")
+    return SimSpec.of(
+        values, {"name": "open", "width": 12, "height": 12}, "direct", "random"
+    ).build()
 
 
 # ----------------------------------------------------------------- the paper's PoC
@@ -171,12 +173,12 @@ def test_two_task_setting_always_task_a() -> None:
     """Two-task setting (paper mode, 10 robots, 10x10, direct): the queue always holds tasks
     A and B; always picking A costs each robot its start -> (0,0) once, then sqrt(18) each
     time, i.e. about 500*sqrt(18)."""
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 10, "num_tasks": 500, "queue_len": 2, "episode_mode": "paper"},
         {"name": "open", "width": 10, "height": 10},
         "direct",
         "two_task",
-    )
+    ).build()
     sim.reset(5)
     total = 0.0
     while not sim.done:
@@ -196,7 +198,7 @@ def test_two_task_setting_always_task_a() -> None:
 def test_two_task_needs_queue_of_two() -> None:
     """The two-task stream refills each slot with its own task, so queue_len must be 2."""
     with pytest.raises(ConfigError, match="queue_len must be 2"):
-        build_sim({"num_robots": 2, "queue_len": 3}, "open", "direct", "two_task")
+        SimSpec.of({"num_robots": 2, "queue_len": 3}, "open", "direct", "two_task").build()
 
 
 # ----------------------------------------------------------------- invalid input
@@ -275,8 +277,8 @@ def test_sim_construction_errors() -> None:
         WarehouseSim(SimConfig(), layout, DirectNavigator(open_grid(3, 3)), RandomTasks())
     with pytest.raises(ConfigError, match="num_robots=10 exceeds the 9 free cells"):
         WarehouseSim(SimConfig(), layout, DirectNavigator(layout), RandomTasks())
-    with pytest.raises(ConfigError, match=r"unknown env keys \['robots'\]"):
-        build_sim({"robots": 3}, "open", "direct", "random")
+    with pytest.raises(ConfigError, match=r"unknown key env\.robots; valid keys: num_robots"):
+        SimSpec.of({"robots": 3}, "open", "direct", "random").build()
     grid = np.zeros((4, 4), dtype=bool)
     grid[1, 1] = True
     blocked = Layout(grid)
@@ -461,12 +463,12 @@ def test_idle_is_non_negative_with_default_noise() -> None:
 def test_scale_thousand_robots() -> None:
     """1000 robots and 2000 tasks on a 128x128 open grid with A* and MPDM: every task served
     exactly once and each TTD equals the Manhattan distance (smoke test, no timing)."""
-    sim = build_sim(
+    sim = SimSpec.of(
         {"num_robots": 1000, "num_tasks": 2000},
         {"name": "open", "width": 128, "height": 128},
         "astar",
         "random",
-    )
+    ).build()
     run(sim, MPDM(), 0)
     metrics = sim.metrics()
     assert sim.done

@@ -18,7 +18,7 @@ from rtaw_marl.sim.navigation import (
     Navigator,
     TargetSlots,
 )
-from rtaw_marl.sim.registry import make_navigator
+from rtaw_marl.sim.options import navigator_option
 
 FAST = settings(max_examples=30, deadline=None, database=None)
 
@@ -174,7 +174,7 @@ def test_target_slots_match_distance_matrix(nav_name: str) -> None:
     """TargetSlots (set, distances_from, distances_from_one, distance_to) agree with
     distance_matrix, including after a slot is re-targeted."""
     layout = shelf_grid(24, 18, shelf_width=4, shelf_height=2, aisle=2, margin=2)
-    nav: Navigator = make_navigator(nav_name, layout)
+    nav: Navigator = navigator_option(nav_name).navigator(layout)
     rng = np.random.default_rng(7)
     cells = layout.main_cells
     targets = cells[rng.choice(len(cells), size=4, replace=False)]
@@ -232,13 +232,13 @@ def test_unreachable_pairs_raise() -> None:
 def test_make_navigator() -> None:
     """make_navigator builds the named class; an unknown name lists the registered ones."""
     layout = open_grid(4, 4)
-    assert isinstance(make_navigator("astar", layout), AStarNavigator)
-    assert isinstance(make_navigator("direct", layout), DirectNavigator)
-    assert make_navigator("direct", layout).layout is layout
+    assert isinstance(navigator_option("astar").navigator(layout), AStarNavigator)
+    assert isinstance(navigator_option("direct").navigator(layout), DirectNavigator)
+    assert navigator_option("direct").navigator(layout).layout is layout
     with pytest.raises(
         ConfigError, match=r"unknown navigator 'dijkstra'.*astar, cbs, direct, sipp"
     ):
-        make_navigator("dijkstra", layout)
+        navigator_option("dijkstra").navigator(layout)
 
 
 # ----------------------------------------------------------------- cache

@@ -9,7 +9,7 @@ import pytest
 
 from rtaw_marl.errors import ConfigError, LayoutError, TaskFileError
 from rtaw_marl.sim.layout import Layout, open_grid, shelf_grid
-from rtaw_marl.sim.registry import make_layout, make_task_stream
+from rtaw_marl.sim.options import layout_option, task_option
 from rtaw_marl.sim.tasks import (
     DEFAULT_CENTRES,
     POC_TASKS,
@@ -62,7 +62,7 @@ def test_random_streams_are_seeded(stream: TaskStream) -> None:
 @pytest.mark.parametrize("name", ["poc", "two_task"])
 def test_fixed_streams_ignore_seed(name: str) -> None:
     """Fixed task lists are the same whatever the seed (deterministic by construction)."""
-    stream = make_task_stream(name)
+    stream = task_option(name).build()
     layout = open_grid(10, 10)
     count = 5 if name == "poc" else 7
     a = stream.generate(_rng(1), layout, count)
@@ -225,14 +225,14 @@ def test_fixed_tasks_errors() -> None:
 
 def test_make_task_stream_builds_streams(tmp_path: Path) -> None:
     """Names, mappings with parameters and objects all give task streams."""
-    assert isinstance(make_task_stream("random"), RandomTasks)
-    designated = make_task_stream({"name": "designated", "sigma": 2.5})
+    assert isinstance(task_option("random").build(), RandomTasks)
+    designated = task_option({"name": "designated", "sigma": 2.5}).build()
     assert isinstance(designated, DesignatedTasks)
     assert designated.sigma == 2.5
     obj = RandomTasks()
-    assert make_task_stream(obj) is obj
+    assert task_option(obj).build() is obj
     csv_path = _write(tmp_path, "ox,oy,dx,dy\n0,0,1,1\n")
-    stream = make_task_stream({"name": "file", "path": str(csv_path)})
+    stream = task_option({"name": "file", "path": str(csv_path)}).build()
     assert isinstance(stream, FixedTasks)
     assert stream.tasks.tolist() == [[0, 0, 1, 1]]
 
@@ -242,7 +242,7 @@ def test_make_task_stream_builds_streams(tmp_path: Path) -> None:
     [
         (
             "uniform",
-            "unknown task stream 'uniform'; available: clustered, designated, file, poc, "
+            "unknown tasks 'uniform'; available: clustered, designated, file, poc, "
             "random, stations, two_task",
         ),
         (
@@ -250,54 +250,64 @@ def test_make_task_stream_builds_streams(tmp_path: Path) -> None:
             "available: clustered, designated, file, poc, random, stations, two_task",
         ),
         ({"sigma": 2.0}, "needs a 'name'"),
-        ({"name": "random", "sigma": 2.0}, r"unknown parameters \['sigma'\].*available: none"),
+        (
+            {"name": "random", "sigma": 2.0},
+            r"unknown key tasks\.sigma for tasks=random; valid keys: none",
+        ),
         (
             {"name": "designated", "centers": [(1, 1)]},
-            r"unknown parameters \['centers'\].*available: delivery_centres, pickup_centres, sigma",
+            r"unknown key tasks\.centers .*valid keys: pickup_centres, delivery_centres, sigma",
         ),
-        ({"name": "file"}, "task stream 'file' needs path"),
-        ({"name": "file", "path": None}, "parameter 'path' must be set"),
+        ({"name": "file"}, r"tasks=file needs tasks\.path=\.\.\."),
+        ({"name": "file", "path": None}, r"tasks=file needs tasks\.path=\.\.\."),
     ],
 )
 def test_make_task_stream_errors(spec: object, match: str) -> None:
     """Unknown names and parameters fail with ConfigError listing what exists."""
     with pytest.raises(ConfigError, match=match):
-        make_task_stream(spec)  # type: ignore[arg-type]
+        task_option(spec).build()  # type: ignore[arg-type]
 
 
 def test_make_layout_builds_layouts(tmp_path: Path) -> None:
     """Layout specs: a name, a mapping with parameters, a file path or a Layout object."""
-    assert make_layout("open").obstacles.shape == (60, 60)
-    assert make_layout({"name": "open", "width": 5, "height": 4}).obstacles.shape == (4, 5)
-    shelves = make_layout({"name": "shelves", "width": 30, "height": 20, "aisle": 3})
+    assert layout_option("open").build().obstacles.shape == (60, 60)
+    assert layout_option({"name": "open", "width": 5, "height": 4}).build().obstacles.shape == (
+        4,
+        5,
+    )
+    shelves = layout_option({"name": "shelves", "width": 30, "height": 20, "aisle": 3}).build()
     assert np.array_equal(shelves.obstacles, shelf_grid(30, 20, aisle=3).obstacles)
     path = tmp_path / "g.txt"
     path.write_text(".@\n..\n")
-    assert make_layout(str(path)).obstacles.tolist() == [[False, True], [False, False]]
-    assert make_layout({"name": "open", "path": str(path)}).name == "g"
-    assert make_layout({"name": "file", "path": str(path)}).name == "g"
+    assert layout_option(str(path)).build().obstacles.tolist() == [[False, True], [False, False]]
+    assert layout_option({"name": "open", "path": str(path)}).build().name == "g"
+    assert layout_option({"name": "file", "path": str(path)}).build().name == "g"
     grid = open_grid(3, 3)
-    assert make_layout(grid) is grid
+    assert layout_option(grid).build() is grid
 
 
 @pytest.mark.parametrize(
     ("spec", "match", "error"),
     [
-        ("maze", "unknown layout 'maze'; available: open, shelves, warehouse", ConfigError),
-        ("file", "unknown layout 'file'; available: open, shelves, warehouse", ConfigError),
+        (
+            "maze",
+            "unknown layout 'maze'; available: file, open, preset, shelves, warehouse",
+            ConfigError,
+        ),
+        ("file", r"layout=file needs layout\.path=\.\.\.", ConfigError),
         ({"name": "maze"}, "available: file, open, preset, shelves, warehouse", ConfigError),
         ({"width": 5}, "needs a 'name'", ConfigError),
         (
             {"name": "shelves", "rows": 3},
-            r"unknown parameters \['rows'\].*available: aisle, height, margin, shelf_height, "
-            "shelf_width, width",
+            r"unknown key layout\.rows for layout=shelves; valid keys: path, width, height, "
+            "shelf_width, shelf_height, aisle, margin",
             ConfigError,
         ),
-        ({"name": "file"}, "layout 'file' needs path", ConfigError),
+        ({"name": "file"}, r"layout=file needs layout\.path=\.\.\.", ConfigError),
         ("missing.map", "layout file not found", LayoutError),
     ],
 )
 def test_make_layout_errors(spec: object, match: str, error: type[Exception]) -> None:
     """Unknown layout names and parameters fail and list the alternatives."""
     with pytest.raises(error, match=match):
-        make_layout(spec)  # type: ignore[arg-type]
+        layout_option(spec).build()  # type: ignore[arg-type]

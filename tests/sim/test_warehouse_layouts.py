@@ -7,7 +7,7 @@ import pytest
 
 from rtaw_marl.errors import ConfigError, LayoutError
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.registry import make_layout
+from rtaw_marl.sim.options import layout_option
 from rtaw_marl.sim.tasks import ClusteredTasks, StationTasks
 from rtaw_marl.sim.warehouse_layouts import PRESETS, warehouse_grid, warehouse_preset
 
@@ -31,7 +31,7 @@ def test_compactness_levels_match_the_paper() -> None:
 
 
 def test_any_size_layout_c_256() -> None:
-    layout = make_layout({"name": "preset", "preset": "C", "width": 256, "height": 256})
+    layout = layout_option({"name": "preset", "preset": "C", "width": 256, "height": 256}).build()
     assert (layout.width, layout.height) == (256, 256)
     assert layout.num_components == 1
     assert 0.2 < layout.compactness < 0.4
@@ -118,7 +118,7 @@ def test_station_tasks_use_the_stations() -> None:
 
 def test_station_tasks_need_stations() -> None:
     with pytest.raises(ConfigError, match="marks no reachable pickup stations"):
-        StationTasks().generate(np.random.default_rng(0), make_layout("shelves"), 10)
+        StationTasks().generate(np.random.default_rng(0), layout_option("shelves").build(), 10)
 
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import pytest
-from hydra import compose, initialize_config_dir
-from omegaconf import DictConfig
 
-from rtaw_marl.cli import CONF_DIR
+from rtaw_marl.config import compose, to_typed
+from rtaw_marl.training.config import TrainConfig
 
 #: The paper's proof-of-concept simulator settings (appendix).
 POC_ENV = {
@@ -21,10 +20,9 @@ POC_ENV = {
 POC_LAYOUT = {"name": "open", "width": 10, "height": 10}
 
 
-def compose_train(overrides: list[str]) -> DictConfig:
-    """The rtaw-train config with ``overrides`` (progress bar off)."""
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        return compose(config_name="train", overrides=["progress=false", *overrides])
+def compose_train(overrides: list[str]) -> TrainConfig:
+    """The typed rtaw-train config with ``overrides`` (progress bar off)."""
+    return to_typed(compose("train", ["progress=false", *overrides]))
 
 
 @pytest.fixture

@@ -11,8 +11,9 @@ import torch
 
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.models.checkpoint import build_networks, load_checkpoint
+from rtaw_marl.models.config import RTAWConfig
 from rtaw_marl.policies.network import load_policy
-from rtaw_marl.sim.registry import build_sim
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
@@ -21,7 +22,7 @@ pytestmark = pytest.mark.slow
 
 def _poc_optimum() -> float:
     """Exhaustive search over every action sequence of the proof of concept."""
-    sim = build_sim(POC_ENV, POC_LAYOUT, "direct", "poc")
+    sim = SimSpec.of(POC_ENV, POC_LAYOUT, "direct", "poc").build()
     best = np.inf
     for actions in itertools.product(range(2), repeat=5):
         sim.reset(0)
@@ -45,7 +46,7 @@ def test_poc_reaches_the_exhaustive_optimum(train_cfg, tmp_path: Path) -> None:
     assert result.best_ttd == pytest.approx(optimum, abs=1e-3)
     assert result.mpdm_ttd == pytest.approx(22.737, abs=1e-3)
     # The best checkpoint reproduces it through the evaluation path.
-    sim = build_sim(POC_ENV, POC_LAYOUT, "direct", "poc")
+    sim = SimSpec.of(POC_ENV, POC_LAYOUT, "direct", "poc").build()
     policy = load_policy(result.best_checkpoint)
     sim.reset(0)
     total = 0.0
@@ -54,15 +55,17 @@ def test_poc_reaches_the_exhaustive_optimum(train_cfg, tmp_path: Path) -> None:
     assert total == pytest.approx(optimum, abs=1e-3)
 
 
-def _prob_short_task(actor_state: dict, model_config: dict) -> float:
+def _prob_short_task(actor_state: dict, model_config: RTAWConfig | dict) -> float:
     """Mean probability the stochastic policy picks task A (slot 0) in two-task states."""
     actor, _ = build_networks(model_config)
     actor.load_state_dict(actor_state)
     env = BatchedWarehouseEnv(
-        {"num_robots": 10, "num_tasks": 200, "queue_len": 2, "episode_mode": "paper"},
-        {"name": "open", "width": 10, "height": 10},
-        "direct",
-        "two_task",
+        SimSpec.of(
+            {"num_robots": 10, "num_tasks": 200, "queue_len": 2, "episode_mode": "paper"},
+            {"name": "open", "width": 10, "height": 10},
+            "direct",
+            "two_task",
+        ),
         num_envs=4,
         seed=123,
     )
@@ -80,8 +83,8 @@ def _prob_short_task(actor_state: dict, model_config: dict) -> float:
 def test_two_task_setting_beats_mpdm_by_45_percent(train_cfg, tmp_path: Path) -> None:
     """Paper: 49.9% below MPDM with 10 robots. Trained policy: >= 45%, and it learned it."""
     cfg = train_cfg(["scenario=two_task", "frames=20480", "eval.every_frames=10240", "seed=0"])
-    untrained, _ = build_networks(dict(cfg.model))
-    before = _prob_short_task(untrained.state_dict(), dict(cfg.model))
+    untrained, _ = build_networks(cfg.model)
+    before = _prob_short_task(untrained.state_dict(), cfg.model)
     result = train(cfg, tmp_path)
     improvement = 100 * (result.mpdm_ttd - result.best_ttd) / result.mpdm_ttd
     assert improvement >= 45.0

@@ -10,7 +10,7 @@ from PIL import Image
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.viz.gif import BASE_COLORS, HEADER_PX, render_gif, robot_color
 
 W, H, T = 8, 6, 14

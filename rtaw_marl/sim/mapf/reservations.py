@@ -1,6 +1,6 @@
 """A reservation table: which robot occupies which cell during which times.
 
-The collision-aware navigators keep every robot's committed trajectory here, as
+The collision-aware fleets keep every robot's committed trajectory here, as
 per-cell lists of occupied time intervals ``[start, end]`` (inclusive). A robot that
 has finished its trajectory *holds* its last cell: its final interval ends at
 :data:`INF` until it is given a new trajectory.
@@ -9,8 +9,7 @@ Committed trajectories are conflict-free, so the intervals of one cell never ove
 and each cell's list is sorted by start. The complement of a cell's intervals is its
 list of *safe intervals*, the states of Safe Interval Path Planning.
 
-Cells are flat indices of the padded grid of
-:class:`~rtaw_marl.sim.navigation.AStarNavigator`.
+Cells are those of :class:`~rtaw_marl.sim.mapf.grid.Grid` (flat indices).
 """
 
 from __future__ import annotations

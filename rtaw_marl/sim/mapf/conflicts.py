@@ -29,7 +29,7 @@ import numpy as np
 
 from rtaw_marl.errors import ScheduleError
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.mapf.schedule import Schedule
 
 __all__ = ["check_schedule", "find_violations"]
 

@@ -1,7 +1,7 @@
-"""Collision-aware episodes (``sipp``, ``cbs``): every schedule passes the conflict checker.
+"""Collision-aware episodes (``sipp``, ``cbs`` executors): every schedule passes the checker.
 
-Hand-made corridors, swaps and bottlenecks with known answers, blocked goals, deadlocks
-and time limits, then hypothesis episodes on random small layouts.
+Hand-made corridors, swaps and bottlenecks with known answers, blocked goals, deadlocks,
+time limits and the CBS node budget, then hypothesis episodes on random small layouts.
 """
 
 from __future__ import annotations
@@ -11,14 +11,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rtaw_marl.errors import ConfigError, PlanningError, PlanningTimeout
+from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError, PlanningTimeout
 from rtaw_marl.evaluation.evaluate import run_episode
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.conflicts import check_schedule
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import SimConfig, WarehouseSim
 from rtaw_marl.sim.layout import Layout, open_grid
-from rtaw_marl.sim.registry import build_sim, make_navigator
-from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.mapf import CBSExecutor, Schedule, SIPPExecutor, check_schedule
+from rtaw_marl.sim.navigation import AStarNavigator
+from rtaw_marl.sim.options import navigator_option
 from rtaw_marl.sim.tasks import FixedTasks
 
 PLANNERS = ["sipp", "cbs"]
@@ -43,7 +44,9 @@ def play(
         num_robots=len(starts), num_tasks=len(tasks), queue_len=queue_len, noise_mean=0.0,
         noise_var=0.0, robot_starts=tuple(starts), **env,
     )  # fmt: skip
-    sim = WarehouseSim(config, layout, make_navigator(navigator, layout), FixedTasks(tasks))
+    option = navigator_option(navigator)
+    sim = WarehouseSim(config, layout, option.navigator(layout), FixedTasks(tasks),
+                       executor=option.executor())  # fmt: skip
     sim.reset(0)
     for i in range(len(tasks)):
         sim.step(actions[i] if actions else int(np.flatnonzero(sim.queue_mask)[0]))
@@ -103,7 +106,7 @@ def test_idle_robot_on_the_goal_is_moved_aside(nav: str) -> None:
     """The last task's destination is where an idle robot stands: it steps aside."""
     layout = open_grid(5, 3)
     sim, schedule = play(layout, nav, [(0, 1), (4, 1)], [(1, 1, 4, 1)])
-    assert sim.fleet.evacuations >= 1
+    assert sim.executor.stats()["evacuations"] >= 1
     assert tuple(schedule.positions[-1, 0]) == (4, 1)
     assert tuple(schedule.positions[-1, 1]) != (4, 1)
 
@@ -118,7 +121,7 @@ def test_robot_waits_for_the_holder_of_its_goal(nav: str) -> None:
     layout = open_grid(6, 3)
     tasks = [(0, 0, 5, 1), (5, 1, 5, 0)]
     sim, schedule = play(layout, nav, [(0, 0), (5, 1)], tasks, queue_len=2)
-    assert sim.fleet.planning_calls > 2  # robot 0 could not plan at first
+    assert sim.executor.stats()["planning_calls"] > 2  # robot 0 could not plan at first
     assert schedule.task_delivered.tolist() == [6, 1]
 
 
@@ -142,20 +145,78 @@ def test_config_errors(nav: str) -> None:
     """Completion noise, fractional start times and a bad time limit are refused."""
     layout = open_grid(4, 4)
     tasks = FixedTasks([(0, 0, 1, 1)])
-    with pytest.raises(ConfigError, match=r"env.noise_mean=0 env.noise_var=0"):
-        WarehouseSim(SimConfig(num_robots=1, num_tasks=1), layout,
-                     make_navigator(nav, layout), tasks)  # fmt: skip
+    astar = AStarNavigator(layout)
+    with pytest.raises(ConfigError, match=rf"navigator '{nav}' .*env.noise_mean=0 env.noise_var=0"):
+        WarehouseSim(SimConfig(num_robots=1, num_tasks=1), layout, astar, tasks,
+                     executor=navigator_option(nav).executor())  # fmt: skip
     config = SimConfig(num_robots=1, num_tasks=1, noise_mean=0, noise_var=0,
                        robot_free_times=(0.5,))  # fmt: skip
     with pytest.raises(ConfigError, match=r"whole-second env.robot_free_times"):
-        WarehouseSim(config, layout, make_navigator(nav, layout), tasks)
-    with pytest.raises(ConfigError, match=r"navigator.time_limit must be a positive"):
-        make_navigator({"name": nav, "time_limit": 0}, layout)
-    with pytest.raises(ConfigError, match=r"unknown parameters \['timelimit'\]"):
-        make_navigator({"name": nav, "timelimit": 3}, layout)
-    sim = build_sim({"num_robots": 1, "num_tasks": 1}, layout, "astar", tasks)
-    with pytest.raises(ConfigError, match="use navigator=sipp or navigator=cbs"):
+        WarehouseSim(config, layout, astar, tasks, executor=navigator_option(nav).executor())
+    for bad in (0, -1.0, True, "3"):
+        with pytest.raises(ConfigError, match=r"navigator.time_limit must be a positive"):
+            navigator_option({"name": nav, "time_limit": bad}).executor()
+        with pytest.raises(ConfigError, match=r"navigator.time_limit must be a positive"):
+            navigator_option({"name": nav, "time_limit": bad})
+    with pytest.raises(ConfigError, match=r"unknown key navigator\.timelimit"):
+        navigator_option({"name": nav, "timelimit": 3})
+    sim = SimSpec.of({"num_robots": 1, "num_tasks": 1}, layout, "astar", tasks).build()
+    with pytest.raises(ConfigError, match=r"'astar' moves robots independently.*navigator=sipp"):
         sim.schedule()
+
+
+def test_executor_parameters_are_explicit_and_checked() -> None:
+    """No defaults in the executors; a bad max_nodes is refused; one executor per sim."""
+    with pytest.raises(TypeError):
+        SIPPExecutor()  # type: ignore[call-arg]
+    with pytest.raises(TypeError):
+        CBSExecutor(time_limit=1.0)  # type: ignore[call-arg]
+    for bad in (0, 1.5, True):
+        with pytest.raises(ConfigError, match=r"navigator.max_nodes must be a positive integer"):
+            CBSExecutor(time_limit=1.0, max_nodes=bad)  # type: ignore[arg-type]
+    layout = open_grid(4, 4)
+    config = SimConfig(num_robots=1, num_tasks=1, noise_mean=0, noise_var=0)
+    executor = SIPPExecutor(time_limit=1.0)
+    assert (executor.name, executor.collision_aware) == ("sipp", True)
+    sim = WarehouseSim(config, layout, AStarNavigator(layout), FixedTasks([(0, 0, 1, 1)]),
+                       executor=executor)  # fmt: skip
+    with pytest.raises(InvalidActionError, match="only when the episode is done"):
+        sim.schedule()
+    with pytest.raises(ConfigError, match="already belongs to a simulator"):
+        WarehouseSim(config, layout, AStarNavigator(layout), FixedTasks([(0, 0, 1, 1)]),
+                     executor=executor)  # fmt: skip
+
+
+def test_registry_builds_astar_plus_the_executor_with_its_parameters() -> None:
+    """``sipp``/``cbs`` specs: an A* navigator and the executor with exactly the values given."""
+    env = {"num_robots": 2, "num_tasks": 2, "noise_mean": 0.0, "noise_var": 0.0}
+    sim = SimSpec.of(
+        env, "open", {"name": "cbs", "time_limit": 1.5, "max_nodes": 7}, "random"
+    ).build()
+    assert isinstance(sim.navigator, AStarNavigator)
+    assert isinstance(sim.executor, CBSExecutor)
+    assert (sim.executor.time_limit, sim.executor.max_nodes) == (1.5, 7)
+    assert sim.executor.fleet.max_nodes == 7
+    sim = SimSpec.of(env, "open", "sipp", "random").build()
+    assert isinstance(sim.navigator, AStarNavigator)
+    assert isinstance(sim.executor, SIPPExecutor)
+    assert sim.executor.time_limit == 10.0
+    defaults = navigator_option("cbs").executor()
+    assert (defaults.time_limit, defaults.max_nodes) == (10.0, 200)  # type: ignore[attr-defined]
+    assert navigator_option("cbs").executor() is not defaults  # a fresh one per simulator
+
+
+def test_cbs_node_budget_falls_back_and_counts() -> None:
+    """With one high-level node the joint plan through a one-cell door is out of budget:
+    the second robot plans alone around the first (a counted fallback), validly."""
+    layout = grid("...@...", ".......", "...@...")
+    starts, tasks = [(2, 0), (2, 2)], [(4, 0, 6, 0), (4, 2, 6, 2)]
+    sim, schedule = play(layout, {"name": "cbs", "max_nodes": 1}, starts, tasks, queue_len=2)
+    fleet = sim.executor.fleet
+    assert (fleet.last_cbs.nodes, fleet.last_cbs.exhausted) == (1, "max_nodes")
+    assert sim.executor.stats()["cbs_fallbacks"] == fleet.fallbacks == 1
+    # The fallback still shares the door: one robot is delayed by exactly one step.
+    assert sorted(schedule.task_ttd.tolist()) == [4, 5]
 
 
 @pytest.mark.parametrize("nav", PLANNERS)
@@ -164,19 +225,20 @@ def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> No
     env = {"num_robots": 10, "num_tasks": 40, "noise_mean": 0.0, "noise_var": 0.0}
     runs = []
     for _ in range(2):
-        sim = build_sim(env, {"name": "preset", "preset": "C"}, nav, "designated")
+        sim = SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated").build()
         run_episode(sim, make_baseline("mpdm"), seed=3)
         schedule = sim.schedule()
         check_schedule(sim.layout, schedule, expected_tasks=40)
         runs.append((sim, schedule))
     (sim, a), (_, b) = runs
     np.testing.assert_array_equal(a.positions, b.positions)
-    assert set(sim.fleet.stats()) == {"planning_calls", "evacuations", "cbs_fallbacks"}
-    assert sim.fleet.stats()["planning_calls"] >= 40
+    assert (sim.executor.name, sim.executor.collision_aware) == (nav, True)
+    assert set(sim.executor.stats()) == {"planning_calls", "evacuations", "cbs_fallbacks"}
+    assert sim.executor.stats()["planning_calls"] >= 40
     assert sim.metrics().ttd == pytest.approx(float(a.task_ttd.sum()))
     assert sim.metrics().makespan == pytest.approx(float(a.task_delivered.max()))
     # Waits only ever add to the single-robot distances.
-    astar = make_navigator("astar", sim.layout)
+    astar = navigator_option("astar").navigator(sim.layout)
     starts = a.positions[a.task_assigned, a.task_robot]
     assert (a.task_ttd >= astar.distance(starts, a.tasks[:, :2])).all()
 
@@ -202,7 +264,7 @@ def test_dense_small_cases_complete(nav: str, case: int) -> None:
     """Robots that block each other's only ways are moved aside; every task is delivered."""
     rows, starts, tasks = DENSE[case]
     sim, _ = play(grid(*rows), nav, starts, tasks, queue_len=2)
-    assert sim.fleet.evacuations >= 1
+    assert sim.executor.stats()["evacuations"] >= 1
 
 
 @st.composite

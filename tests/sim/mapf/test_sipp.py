@@ -1,4 +1,4 @@
-"""Reservation table and the SIPP search on hand-made corridors with known optima."""
+"""The SIPP search on hand-made corridors with known optima."""
 
 from __future__ import annotations
 
@@ -6,12 +6,8 @@ import numpy as np
 import pytest
 
 from rtaw_marl.errors import PlanningTimeout
-from rtaw_marl.sim.conflicts import check_schedule
 from rtaw_marl.sim.layout import Layout, open_grid
-from rtaw_marl.sim.navigation import AStarNavigator
-from rtaw_marl.sim.reservations import INF, ReservationTable
-from rtaw_marl.sim.schedule import Schedule
-from rtaw_marl.sim.sipp import sipp_plan
+from rtaw_marl.sim.mapf import Grid, ReservationTable, Schedule, check_schedule, sipp_plan
 
 #: A one-cell pocket above x = 3 of a 7-cell corridor (y = 1).
 POCKET = Layout(np.array([[c == "@" for c in row] for row in ("@@@.@@@", ".......")]))
@@ -21,49 +17,28 @@ class Planner:
     """sipp_plan on (x, y) cells of a layout, with reservations given as (x, y) paths."""
 
     def __init__(self, layout: Layout, robots: int = 3) -> None:
-        self.nav = AStarNavigator(layout)
+        self.grid = Grid.from_layout(layout)
         self.table = ReservationTable(robots)
-        self.free = self.nav._free_padded.tolist()
-
-    def cell(self, xy: tuple[int, int]) -> int:
-        return int(self.nav._padded_index(np.array(xy)))
 
     def reserve(self, robot: int, t0: int, path: list[tuple[int, int]]) -> None:
-        self.table.reserve(robot, t0, [self.cell(xy) for xy in path])
+        self.table.reserve(robot, t0, [self.grid.cell(*xy) for xy in path])
 
     def plan(
-        self, start: tuple[int, int], goals: list[tuple[int, int]], t0: int = 0, deadline=None
+        self,
+        start: tuple[int, int],
+        goals: list[tuple[int, int]],
+        t0: int = 0,
+        deadline: float | None = None,
     ) -> tuple[list[tuple[int, int]], list[int]] | None:
         found = sipp_plan(
-            self.table, self.free, self.nav._wp, self.cell(start), t0,
-            [self.cell(g) for g in goals], [self.nav.field(*g) for g in goals],
+            self.grid, self.table, self.grid.cell(*start), t0,
+            [self.grid.cell(*g) for g in goals],
             deadline if deadline is not None else float("inf"),
         )  # fmt: skip
         if found is None:
             return None
         cells, times = found
-        wp = self.nav._wp
-        return [(c % wp - 1, c // wp - 1) for c in cells], times
-
-
-def test_reservation_table_intervals_holds_and_release() -> None:
-    """Runs become intervals, the last cell is held forever, release_from cuts at t."""
-    table = ReservationTable(2)
-    table.reserve(0, 2, [10, 10, 11, 12])  # 10 during [2, 3], 11 at 4, 12 from 5 on
-    assert table.occupant(10, 1) == -1
-    assert table.occupant(10, 3) == 0
-    assert table.occupant(12, 10**9) == 0
-    assert table.holder(12) == 0
-    assert table.holder(10) == -1
-    assert table.safe_intervals(10) == [(0, 1), (4, INF)]
-    assert table.safe_intervals(12) == [(0, 4)]
-    table.release_from(0, 4)
-    assert table.occupant(11, 4) == -1
-    assert table.safe_intervals(12) == [(0, INF)]
-    assert table.safe_intervals(10) == [(0, 1), (4, INF)]
-    table.reserve(0, 4, [10, 20])  # waiting on in cell 10 merges into its interval
-    assert table.safe_intervals(10) == [(0, 1), (5, INF)]
-    assert table.holder(20) == 0
+        return [self.grid.xy(c) for c in cells], times
 
 
 def test_free_grid_path_is_the_shortest_path() -> None:

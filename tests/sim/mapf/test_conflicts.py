@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from rtaw_marl.errors import ScheduleError
-from rtaw_marl.sim.conflicts import check_schedule, find_violations
 from rtaw_marl.sim.layout import Layout, open_grid
-from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.mapf.conflicts import check_schedule, find_violations
+from rtaw_marl.sim.mapf.schedule import Schedule
 
 #: 4 x 3 open grid of the hand-made schedule below.
 GRID = open_grid(4, 3)

@@ -1,4 +1,4 @@
-"""Conflict-Based Search: validity, known optima, infeasibility, deadlines, random grids."""
+"""Conflict-Based Search: validity, known optima, infeasibility, budgets, random grids."""
 
 from __future__ import annotations
 
@@ -6,7 +6,6 @@ import heapq
 import itertools
 import time
 from collections import deque
-from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -14,10 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rtaw_marl.errors import PlanningTimeout
-from rtaw_marl.sim.cbs import CBSSolution, cbs_solve
-from rtaw_marl.sim.conflicts import check_schedule
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.schedule import Schedule
+from rtaw_marl.sim.mapf import CBSSolution, CBSStats, Grid, Schedule, cbs_solve, check_schedule
 
 FAST = settings(max_examples=30, deadline=None, database=None)
 MOVES = ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))
@@ -47,18 +44,6 @@ def bfs_field(free: np.ndarray, x: int, y: int) -> np.ndarray:
     return dist
 
 
-def heuristic_for(free: np.ndarray) -> Callable[[int, int], np.ndarray]:
-    """A cached BFS-field heuristic, as the simulator provides it."""
-    cache: dict[tuple[int, int], np.ndarray] = {}
-
-    def field(x: int, y: int) -> np.ndarray:
-        if (x, y) not in cache:
-            cache[(x, y)] = bfs_field(free, x, y)
-        return cache[(x, y)]
-
-    return field
-
-
 def solve(
     free: np.ndarray,
     starts: list[tuple[int, int]],
@@ -67,19 +52,26 @@ def solve(
     budget: float = 5.0,
     max_nodes: int | None = None,
     max_expansions: int | None = None,
+    stats: CBSStats | None = None,
 ) -> CBSSolution | None:
-    """Run CBS on plain lists; ``blocked`` defaults to nothing blocked."""
-    blocked = np.zeros_like(free) if blocked is None else blocked
-    return cbs_solve(
-        free,
-        blocked,
-        np.array(starts, dtype=np.int64).reshape(-1, 2),
-        [np.array(g, dtype=np.int64).reshape(-1, 2) for g in goals],
-        heuristic_for(free),
+    """Run CBS on ``(x, y)`` lists; ``blocked`` (``bool [H, W]``) defaults to nothing.
+
+    The solution's paths are returned as ``(x, y)`` arrays ``int64 [L + 1, 2]``.
+    """
+    grid = Grid(free)
+    sol = cbs_solve(
+        grid,
+        [grid.cell(*s) for s in starts],
+        [[grid.cell(*g) for g in agent_goals] for agent_goals in goals],
         time.perf_counter() + budget,
+        blocked=[] if blocked is None else grid.cells(np.argwhere(blocked)[:, ::-1]).tolist(),
         max_nodes=max_nodes,
         max_expansions=max_expansions,
+        stats=stats,
     )
+    if sol is None:
+        return None
+    return CBSSolution([grid.xys(p) for p in sol.paths], sol.goal_times, sol.expanded)
 
 
 def check_solution(
@@ -248,16 +240,22 @@ def test_swap_without_a_pocket_times_out() -> None:
 def test_node_budget_gives_up_deterministically() -> None:
     """Past max_nodes the search returns None (no timeout); a solvable case within it."""
     free = grid("....")
-    assert solve(free, [(0, 0), (3, 0)], [[(3, 0)], [(0, 0)]], max_nodes=50) is None
+    stats = CBSStats()
+    assert solve(free, [(0, 0), (3, 0)], [[(3, 0)], [(0, 0)]], max_nodes=50, stats=stats) is None
+    assert (stats.nodes, stats.exhausted) == (50, "max_nodes")
     pocket = grid("@@.@", "....")
-    sol = solve(pocket, [(0, 1), (3, 1)], [[(3, 1)], [(0, 1)]], max_nodes=50)
+    sol = solve(pocket, [(0, 1), (3, 1)], [[(3, 1)], [(0, 1)]], max_nodes=50, stats=stats)
     assert sol is not None
-    assert sol.expanded <= 50
-    # The low-level budget: each agent of this 60x60 crossing needs 118 expansions.
+    assert sol.expanded == stats.nodes <= 50
+    assert stats.exhausted is None
+    # The low-level budget: each agent of this 60x60 crossing needs 118 expansions; the
+    # first agent overdraws 100 and the second may not start.
     big = np.ones((60, 60), dtype=bool)
     starts, goals = [(0, 0), (59, 0)], [[(59, 59)], [(0, 59)]]
-    assert solve(big, starts, goals, max_expansions=100) is None
-    assert solve(big, starts, goals, max_expansions=300) is not None
+    assert solve(big, starts, goals, max_expansions=100, stats=stats) is None
+    assert (stats.nodes, stats.expansions, stats.exhausted) == (0, 118, "max_expansions")
+    assert solve(big, starts, goals, max_expansions=300, stats=stats) is not None
+    assert stats.expansions == 2 * 118
 
 
 def test_crossing_at_a_junction_makes_one_agent_wait() -> None:
@@ -383,31 +381,36 @@ def test_infeasible_instances_return_none_quickly(
     blocked = np.zeros_like(free)
     for x, y in blocked_cells:
         blocked[y, x] = True
-    started = time.perf_counter()
-    assert solve(free, starts, goals, blocked=blocked) is None
-    assert time.perf_counter() - started < 0.5
+    stats = CBSStats()
+    assert solve(free, starts, goals, blocked=blocked, stats=stats) is None
+    # Found before any high-level node: by the checks up front, or by one static
+    # low-level search (no constraints: states keyed without time, so each (cell, goal
+    # index) is expanded at most once).
+    assert (stats.nodes, stats.exhausted) == (0, None)
+    assert stats.expansions <= int(free.sum()) * 3
 
 
 def test_blocked_wall_on_a_large_grid_is_infeasible_quickly() -> None:
+    """The wall cuts the goal off: one static low-level search proves it, no node."""
     free = np.ones((60, 60), dtype=bool)
     blocked = np.zeros_like(free)
     blocked[30, :] = True
-    started = time.perf_counter()
-    assert solve(free, [(5, 5), (50, 5)], [[(5, 50)], [(50, 10)]], blocked=blocked) is None
-    assert time.perf_counter() - started < 2.0
+    stats = CBSStats()
+    assert (
+        solve(free, [(5, 5), (50, 5)], [[(5, 50)], [(50, 10)]], blocked=blocked, stats=stats)
+        is None
+    )
+    # At most every cell above the wall once (states without constraints are keyed
+    # without time), then the search ends on its own.
+    assert stats.nodes == 0
+    assert stats.exhausted is None
+    assert 0 < stats.expansions <= 30 * 60
 
 
 def test_deadline_in_the_past_raises() -> None:
-    free = grid(*["....."] * 5)
+    free = Grid(grid(*["....."] * 5))
     with pytest.raises(PlanningTimeout, match="after 0 high-level nodes"):
-        cbs_solve(
-            free,
-            np.zeros_like(free),
-            np.array([[0, 0]]),
-            [np.array([[4, 4]])],
-            heuristic_for(free),
-            time.perf_counter() - 1.0,
-        )
+        cbs_solve(free, [free.cell(0, 0)], [[free.cell(4, 4)]], time.perf_counter() - 1.0)
 
 
 @st.composite

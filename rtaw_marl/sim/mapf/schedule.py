@@ -1,9 +1,9 @@
 """An executed episode in space and time: where every robot was at every second.
 
-Collision-aware navigators (``sipp``, ``cbs``) produce a :class:`Schedule` when an
-episode ends. It is the common currency of the conflict checker
-(:mod:`rtaw_marl.sim.conflicts`), which validates it on its own code path, and of the
-GIF renderer (:mod:`rtaw_marl.viz.gif`).
+Collision-aware executors (``sipp``, ``cbs``: :mod:`rtaw_marl.sim.mapf.executors`)
+produce a :class:`Schedule` when an episode ends. It is the common currency of the
+conflict checker (:mod:`rtaw_marl.sim.mapf.conflicts`), which validates it on its own
+code path, and of the GIF renderer (:mod:`rtaw_marl.viz.gif`).
 
 Time is discrete (1 s per step). Cells are ``(x, y)`` with ``x`` the column and ``y``
 the row of :attr:`rtaw_marl.sim.layout.Layout.obstacles`.

@@ -1,0 +1,59 @@
+"""Registers every typed option with Hydra's ConfigStore, under ``schema/<group>/<name>``.
+
+The YAML files in ``rtaw_marl/conf/`` are thin twins: each names its schema in its
+defaults list (``- /schema/layout/shelves@_here_``) and adds only what differs (the
+preset of ``layout=A``, the zero noise of ``navigator=sipp``). The schemas make
+composition typed: an unknown key or a value of the wrong type fails when Hydra composes
+the config, and :func:`rtaw_marl.config.to_typed` turns the result into dataclasses.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from hydra.core.config_store import ConfigStore
+from omegaconf import DictConfig, OmegaConf
+
+from rtaw_marl.evaluation.config import EvalConfig, RenderConfig
+from rtaw_marl.models.config import MODELS
+from rtaw_marl.sim.core import SimConfig
+from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
+from rtaw_marl.training.config import PPOConfig, TrainConfig
+
+__all__ = ["GROUPS", "register_configs"]
+
+#: Config group -> option name -> schema dataclass.
+GROUPS: dict[str, dict[str, type]] = {
+    "env": {"default": SimConfig},
+    "layout": dict(LAYOUTS),
+    "navigator": dict(NAVIGATORS),
+    "tasks": dict(TASK_STREAMS),
+    "model": dict(MODELS),
+    "algo": {"ppo": PPOConfig},
+}
+
+#: Primary configs -> their schema.
+APPS: dict[str, type] = {"eval": EvalConfig, "train": TrainConfig, "render": RenderConfig}
+
+_registered = False
+
+
+def register_configs() -> None:
+    """Store every schema in Hydra's ConfigStore (once per process)."""
+    global _registered
+    if _registered:
+        return
+    store = ConfigStore.instance()
+    for group, options in GROUPS.items():
+        for name, schema in options.items():
+            store.store(group=f"schema/{group}", name=name, node=_node(schema))
+    for name, schema in APPS.items():
+        store.store(group="schema", name=name, node=_node(schema))
+    _registered = True
+
+
+def _node(schema: type) -> DictConfig | Any:
+    node = OmegaConf.structured(schema)
+    # Frozen dataclasses (SimConfig) come back read-only; overrides must still apply.
+    OmegaConf.set_readonly(node, False)
+    return node

@@ -1,0 +1,84 @@
+"""Typed options of ``rtaw-eval`` and ``rtaw-render`` (plain Python, registered with
+Hydra by :mod:`rtaw_marl.config.store`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["EvalConfig", "RenderConfig"]
+
+
+@dataclass(kw_only=True)
+class EvalConfig:
+    """An ``rtaw-eval`` run.
+
+    Attributes:
+        env: The simulator (:class:`~rtaw_marl.sim.core.SimConfig`).
+        layout: A layout option (:mod:`rtaw_marl.sim.options`).
+        navigator: A navigator option.
+        tasks: A task-stream option.
+        policy: Policies to evaluate, by name (one or a list): ``mpdm``, ``rbts``,
+            ``random``, ``checkpoint`` (trained files) and ``rtaw`` (shipped policies).
+        checkpoint: Checkpoint path(s) evaluated when ``policy`` includes ``checkpoint``.
+        pretrained: Shipped policy name(s) evaluated when ``policy`` includes ``rtaw``.
+        seeds: Episode seeds; every policy sees the same tasks for the same seed.
+        lower_bound: Report the assignment lower bound on TTD (drain mode only).
+        output: Where ``results.json`` goes; ``None`` means the Hydra run folder.
+        progress: Show a tqdm progress bar.
+        torch_threads: torch intra-op threads for network policies.
+    """
+
+    env: Any
+    layout: Any
+    navigator: Any
+    tasks: Any
+    policy: Any = field(default_factory=lambda: ["mpdm", "rbts", "random"])
+    checkpoint: Any = None
+    pretrained: Any = None
+    seeds: Any = field(default_factory=lambda: [0, 1, 2, 3, 4])
+    lower_bound: bool = True
+    output: str | None = None
+    progress: bool = True
+    torch_threads: int = 1
+
+
+@dataclass(kw_only=True)
+class RenderConfig:
+    """An ``rtaw-render`` run: one episode of one policy, saved as an animated GIF.
+
+    Attributes:
+        env: The simulator (:class:`~rtaw_marl.sim.core.SimConfig`).
+        layout: A layout option.
+        navigator: A collision-aware navigator option (``sipp`` or ``cbs``).
+        tasks: A task-stream option.
+        policy: One policy: ``mpdm``, ``rbts``, ``random``, ``checkpoint`` or ``rtaw``.
+        checkpoint: The checkpoint path when ``policy=checkpoint``.
+        pretrained: The shipped policy name when ``policy=rtaw``.
+        seed: Episode seed.
+        output: The GIF; ``None`` means ``episode.gif`` in the Hydra run folder.
+        fps: Frames per second.
+        every: Draw every k-th time step.
+        start: First time step drawn.
+        stop: Last time step drawn; ``None``: the end.
+        max_frames: Refuse to draw more frames than this.
+        cell_px: Pixels per grid cell; ``None`` picks about 600 px across.
+        torch_threads: torch intra-op threads for network policies.
+    """
+
+    env: Any
+    layout: Any
+    navigator: Any
+    tasks: Any
+    policy: str = "mpdm"
+    checkpoint: str | None = None
+    pretrained: str | None = None
+    seed: int = 0
+    output: str | None = None
+    fps: int = 8
+    every: int = 1
+    start: int = 0
+    stop: int | None = None
+    max_frames: int = 1000
+    cell_px: int | None = None
+    torch_threads: int = 1

@@ -1,0 +1,129 @@
+"""The one builder: a simulator (or a batch of simulators) from a typed spec.
+
+Every entry point assembles its simulators here: the PettingZoo env, the batched
+TorchRL env, the trainer, ``rtaw-eval``, ``rtaw-render`` and the experiment scripts. A
+:class:`SimSpec` holds the four config groups (``env``, ``layout``, ``navigator``,
+``tasks``) as typed options; :class:`SimFactory` builds the layout, the distance model and
+the task stream once and makes any number of simulators sharing them (the distance
+fields are cached per navigator), each with its own executor.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.core import SimBuffers, SimConfig, WarehouseSim
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.navigation import Navigator
+from rtaw_marl.sim.options import (
+    AStarConfig,
+    DesignatedTasksConfig,
+    LayoutOption,
+    NavigatorOption,
+    ShelvesLayoutConfig,
+    TaskOption,
+    layout_option,
+    navigator_option,
+    task_option,
+)
+from rtaw_marl.sim.tasks import TaskStream
+
+__all__ = ["SimFactory", "SimSpec", "build_sim", "sim_config"]
+
+
+@dataclass(kw_only=True)
+class SimSpec:
+    """Everything that defines a simulator: the ``env``, ``layout``, ``navigator`` and
+    ``tasks`` config groups, typed."""
+
+    env: SimConfig = field(default_factory=SimConfig)
+    layout: LayoutOption = field(default_factory=ShelvesLayoutConfig)
+    navigator: NavigatorOption = field(default_factory=AStarConfig)
+    tasks: TaskOption = field(default_factory=DesignatedTasksConfig)
+
+    @classmethod
+    def of(
+        cls,
+        env: SimConfig | Mapping[str, Any] | None = None,
+        layout: str | Mapping[str, Any] | LayoutOption | None = None,
+        navigator: str | Mapping[str, Any] | NavigatorOption | None = None,
+        tasks: str | Mapping[str, Any] | TaskOption | None = None,
+    ) -> SimSpec:
+        """A spec from names, ``{"name": ..., **keys}`` mappings or typed options; a
+        group left ``None`` takes its default.
+
+        Raises:
+            ConfigError: A name or key is unknown (listing the valid ones), or a value is
+                invalid.
+        """
+        spec = cls()
+        return cls(
+            env=spec.env if env is None else sim_config(env),
+            layout=spec.layout if layout is None else layout_option(layout),
+            navigator=spec.navigator if navigator is None else navigator_option(navigator),
+            tasks=spec.tasks if tasks is None else task_option(tasks),
+        )
+
+    def build(self) -> WarehouseSim:
+        """One simulator for this spec (:func:`build_sim`)."""
+        return SimFactory(self)()
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values (lists, not tuples) for results and checkpoints."""
+        return _plain(dataclasses.asdict(self))
+
+
+class SimFactory:
+    """Builds the shared parts of ``spec`` once, then simulators on demand.
+
+    Attributes:
+        spec: The spec.
+        layout: The layout.
+        navigator: The distance model, shared by every simulator made here.
+        tasks: The task stream (stateless; each simulator draws from its own seed).
+    """
+
+    def __init__(self, spec: SimSpec) -> None:
+        self.spec = spec
+        self.layout: Layout = spec.layout.build()
+        self.navigator: Navigator = spec.navigator.navigator(self.layout)
+        self.tasks: TaskStream = spec.tasks.build()
+
+    def __call__(self, buffers: SimBuffers | None = None) -> WarehouseSim:
+        """A new simulator, optionally writing its state into shared ``buffers``."""
+        return WarehouseSim(
+            self.spec.env,
+            self.layout,
+            self.navigator,
+            self.tasks,
+            buffers,
+            executor=self.spec.navigator.executor(),
+        )
+
+
+def build_sim(spec: SimSpec) -> WarehouseSim:
+    """One simulator for ``spec``."""
+    return SimFactory(spec)()
+
+
+def sim_config(values: SimConfig | Mapping[str, Any]) -> SimConfig:
+    """A :class:`SimConfig` from a mapping; an unknown key is an error listing the valid ones."""
+    if isinstance(values, SimConfig):
+        return values
+    allowed = [f.name for f in dataclasses.fields(SimConfig)]
+    unknown = sorted(set(values) - set(allowed))
+    if unknown:
+        raise ConfigError(f"unknown key env.{unknown[0]}; valid keys: {', '.join(allowed)}")
+    return SimConfig(**dict(values))
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value

@@ -1,0 +1,116 @@
+"""Typed options of ``rtaw-train``: the PPO algorithm, the collector, the periodic
+evaluation, and the whole run. Plain Python (no torch), registered with Hydra by
+:mod:`rtaw_marl.config.store`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["CollectorConfig", "PPOConfig", "TrainConfig", "TrainEvalConfig"]
+
+
+@dataclass(kw_only=True)
+class PPOConfig:
+    """PPO (the ``algo`` group); defaults from the paper's hyperparameter table.
+
+    Attributes:
+        lr: Adam learning rate.
+        frames_per_batch: Frames per update (the paper's "update interval").
+        epochs: Passes over each batch (paper: 16).
+        minibatch_size: Minibatch size (not in the paper's table; its code used 32).
+        gamma: Discount.
+        lmbda: GAE lambda.
+        clip_epsilon: PPO clipping.
+        entropy_coeff_start: Entropy coefficient at the start, annealed linearly
+            (paper: 0.01 -> 0.001).
+        entropy_coeff_end: Entropy coefficient at the end.
+        critic_coeff: Value-function coefficient (paper: 0.0002).
+        policy_coeff: Policy-loss coefficient (paper: 0.02; ``algo=ppo_fast``: 1.0).
+        max_grad_norm: Gradient clipping (max global norm).
+        normalize_advantage: Standardise advantages per minibatch (the original code did).
+        reward_scale: Rewards are multiplied by this before GAE; ``None`` means
+            1 / layout scale.
+    """
+
+    lr: float = 3.0e-4
+    frames_per_batch: int = 512
+    epochs: int = 16
+    minibatch_size: int = 64
+    gamma: float = 0.99
+    lmbda: float = 0.95
+    clip_epsilon: float = 0.2
+    entropy_coeff_start: float = 0.01
+    entropy_coeff_end: float = 0.001
+    critic_coeff: float = 0.0002
+    policy_coeff: float = 0.02
+    max_grad_norm: float = 0.5
+    normalize_advantage: bool = True
+    reward_scale: float | None = None
+
+
+@dataclass(kw_only=True)
+class CollectorConfig:
+    """How frames are collected (``collector.*``).
+
+    Attributes:
+        workers: Worker processes (a multi-process collector when > 1).
+        envs_per_worker: Simulators per worker, stepped as one batched env.
+    """
+
+    workers: int = 1
+    envs_per_worker: int = 16
+
+
+@dataclass(kw_only=True)
+class TrainEvalConfig:
+    """Greedy evaluation during training (``eval.*``).
+
+    Attributes:
+        every_frames: Evaluate against MPDM every this many frames.
+        seeds: Selection seeds, kept apart from the evaluation seeds 0-19.
+    """
+
+    every_frames: int = 20480
+    seeds: list[int] = field(default_factory=lambda: [1000, 1001, 1002, 1003, 1004])
+
+
+@dataclass(kw_only=True)
+class TrainConfig:
+    """A whole ``rtaw-train`` run.
+
+    Attributes:
+        env: The simulator (:class:`~rtaw_marl.sim.core.SimConfig`).
+        layout: A layout option (:mod:`rtaw_marl.sim.options`).
+        navigator: A navigator option.
+        tasks: A task-stream option.
+        model: A model option (:class:`~rtaw_marl.models.config.RTAWConfig`).
+        algo: The PPO settings.
+        seed: Seed of the whole run (networks, sampling, episodes).
+        frames: Total frames (decisions) to collect.
+        torch_threads: torch intra-op threads (1 is fastest for this small network).
+        collector: Collection settings.
+        eval: Periodic greedy evaluation settings.
+        logger: ``csv``, ``tensorboard`` or ``none``.
+        resume: A checkpoint to continue from.
+        output_dir: The run folder; ``None`` means the Hydra run folder.
+        progress: Show a tqdm progress bar.
+        interop: Train through TorchRL's PettingZooWrapper on the AEC env (small M).
+    """
+
+    env: Any
+    layout: Any
+    navigator: Any
+    tasks: Any
+    model: Any
+    algo: PPOConfig = field(default_factory=PPOConfig)
+    seed: int = 0
+    frames: int = 200_000
+    torch_threads: int = 1
+    collector: CollectorConfig = field(default_factory=CollectorConfig)
+    eval: TrainEvalConfig = field(default_factory=TrainEvalConfig)
+    logger: str = "csv"
+    resume: str | None = None
+    output_dir: str | None = None
+    progress: bool = True
+    interop: bool = False

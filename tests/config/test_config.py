@@ -1,0 +1,178 @@
+"""The typed config spine: schemas, YAML twins, unknown keys, and one builder for all."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+import yaml
+
+from rtaw_marl.config import CONF_DIR, GROUPS, compose, to_typed
+from rtaw_marl.config.store import APPS
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim import builder
+
+GROUP_DIRS = ("env", "layout", "navigator", "tasks", "model", "algo")
+
+
+def _twins() -> list[tuple[str, str]]:
+    return [(g, p.stem) for g in GROUP_DIRS for p in sorted((CONF_DIR / g).glob("*.yaml"))]
+
+
+@pytest.mark.parametrize(("group", "option"), _twins(), ids=lambda v: str(v))
+def test_yaml_twin_is_its_schema_plus_what_it_sets(group: str, option: str) -> None:
+    """Each YAML option composes to a schema's dataclass; it writes no default twice."""
+    text = yaml.safe_load((CONF_DIR / group / f"{option}.yaml").read_text())
+    schema_name = text["defaults"][0].split("/")[-1].split("@")[0]
+    schema = GROUPS[group][schema_name]
+    overrides = [f"{group}={option}"]
+    if (group, option) in (("layout", "file"), ("tasks", "file")):
+        overrides.append(f"{group}.path=some/file")
+    typed = getattr(to_typed(compose("train", overrides)), group)
+    assert type(typed) is schema
+    own = {k: v for k, v in text.items() if k not in ("defaults", "env")}
+    required = {
+        f.name: own.get(f.name, "some/file")
+        for f in dataclasses.fields(schema)
+        if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+    }
+    defaults = schema(**required)
+    for field in dataclasses.fields(schema):
+        expected = own.get(field.name, getattr(defaults, field.name))
+        assert getattr(typed, field.name) == expected, field.name
+    for key, value in own.items():
+        if key not in required:
+            assert value != getattr(defaults, key), f"{key} repeats the schema default"
+
+
+@pytest.mark.parametrize("app", sorted(APPS))
+def test_every_app_composes_to_its_dataclass(app: str) -> None:
+    cfg = to_typed(compose(app))
+    assert type(cfg) is APPS[app]
+
+
+@pytest.mark.parametrize(
+    "key",
+    [
+        "env.num_robot",
+        "layout.widht",
+        "navigator.time_limit",  # astar has no time limit
+        "tasks.sigmaa",
+        "model.embed_dmi",
+        "algo.lrr",
+        "collector.worker",
+        "eval.seed",
+        "frame",
+    ],
+)
+def test_unknown_key_in_any_group_is_one_line_exit_2(key: str, cli, tmp_path: Path) -> None:
+    """``rtaw-train +algo.lrr=1``: one line naming the key and the valid ones, exit 2."""
+    result = cli("train", f"+{key}=1", f"output_dir={tmp_path}")
+    assert result.code == 2
+    lines = result.err.strip().splitlines()
+    assert len(lines) == 1, result.err
+    assert f"unknown config key '{key}'" in lines[0]
+    assert "valid keys there:" in lines[0]
+
+
+@pytest.mark.parametrize("app", ["eval", "render"])
+def test_unknown_key_in_eval_and_render(app: str, cli) -> None:
+    result = cli(app, "+env.bogus=3")
+    assert result.code == 2
+    assert result.err.startswith("error: unknown config key 'env.bogus'; valid keys there: num_")
+
+
+def test_wrong_type_is_one_line(cli) -> None:
+    result = cli("eval", "env.num_robots=many")
+    assert result.code == 2
+    assert result.err.strip() == (
+        "error: config key 'env.num_robots': Value 'many' of type 'str' could not be "
+        "converted to Integer"
+    )
+
+
+def test_compose_errors_are_config_errors() -> None:
+    with pytest.raises(ConfigError, match=r"unknown config key 'algo\.lrr'"):
+        to_typed(compose("train", ["+algo.lrr=1"]))
+    with pytest.raises(ConfigError, match="available: astar, cbs, direct, sipp"):
+        compose("train", ["navigator=dijkstra"])
+
+
+# --------------------------------------------------------------------------- one builder
+PARAMS = [
+    "layout=warehouse",
+    "layout.width=24",
+    "layout.height=20",
+    "layout.shelf_width=4",
+    "layout.shelf_height=1",
+    "layout.aisle_x=3",
+    "layout.aisle_y=2",
+    "layout.highway_every=2",
+    "layout.highway_width=3",
+    "layout.margin=3",
+    "layout.station_spacing=3",
+    "navigator=cbs",
+    "navigator.time_limit=1.5",
+    "navigator.max_nodes=7",
+    "tasks=clustered",
+    "tasks.num_clusters=3",
+    "tasks.sigma=2.5",
+    "env.num_robots=3",
+    "env.num_tasks=8",
+    "env.queue_len=3",
+]
+
+
+@pytest.fixture
+def built_specs(monkeypatch) -> list[builder.SimSpec]:
+    """Every spec the one builder receives while the test runs."""
+    specs: list[builder.SimSpec] = []
+    original = builder.SimFactory.__init__
+
+    def spy(self, spec: builder.SimSpec) -> None:
+        specs.append(spec)
+        original(self, spec)
+
+    monkeypatch.setattr(builder.SimFactory, "__init__", spy)
+    return specs
+
+
+def _assert_params_reached(specs: list[builder.SimSpec]) -> None:
+    assert specs, "no simulator was built through rtaw_marl.sim.builder"
+    for spec in specs:
+        layout, nav, tasks = spec.layout, spec.navigator, spec.tasks
+        assert (layout.name, layout.width, layout.height) == ("warehouse", 24, 20)
+        assert (layout.shelf_width, layout.shelf_height) == (4, 1)
+        assert (layout.aisle_x, layout.aisle_y, layout.margin) == (3, 2, 3)
+        assert (layout.highway_every, layout.highway_width, layout.station_spacing) == (2, 3, 3)
+        assert (nav.name, nav.time_limit, nav.max_nodes) == ("cbs", 1.5, 7)
+        assert (tasks.name, tasks.num_clusters, tasks.sigma) == ("clustered", 3, 2.5)
+        assert (spec.env.num_robots, spec.env.num_tasks, spec.env.queue_len) == (3, 8, 3)
+        executor = spec.navigator.executor()
+        assert (executor.time_limit, executor.max_nodes) == (1.5, 7)
+
+
+def test_every_parameter_reaches_the_simulator_from_rtaw_eval(cli, built_specs) -> None:
+    result = cli("eval", *PARAMS, "policy=[mpdm]", "seeds=[0]", "progress=false")
+    assert result.code == 0, result.err
+    _assert_params_reached(built_specs)
+
+
+def test_every_parameter_reaches_the_simulator_from_rtaw_render(cli, built_specs) -> None:
+    result = cli("render", *PARAMS, "policy=mpdm", "output=e.gif", "max_frames=5000")
+    assert result.code == 0, result.err
+    _assert_params_reached(built_specs)
+
+
+def test_every_parameter_reaches_the_simulator_from_rtaw_train(cli, built_specs, tmp_path) -> None:
+    """Regression: training used to keep only navigator.name and drop its budgets."""
+    result = cli(
+        "train", *PARAMS, "frames=48", "algo.frames_per_batch=48", "algo.minibatch_size=16",
+        "collector.envs_per_worker=4", "eval.seeds=[1000]", "eval.every_frames=48",
+        f"output_dir={tmp_path / 'run'}", "progress=false",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    # The evaluation envs, the MPDM reference and the collector's envs.
+    assert len(built_specs) >= 3
+    _assert_params_reached(built_specs)

@@ -1,0 +1,114 @@
+"""The layers: data flows one way, no import circles, light packages stay light."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "rtaw_marl"
+
+#: Layer of each part of the package; a module may import only its own layer or lower ones.
+LAYERS = {
+    "rtaw_marl": 0,
+    "rtaw_marl.errors": 0,
+    "rtaw_marl.utils": 0,
+    "rtaw_marl.sim": 1,
+    "rtaw_marl.envs": 2,
+    "rtaw_marl.warehouse_v0": 2,
+    "rtaw_marl.models": 3,
+    "rtaw_marl.policies": 4,
+    "rtaw_marl.evaluation": 5,
+    "rtaw_marl.viz": 5,
+    "rtaw_marl.training": 6,
+    "rtaw_marl.config": 7,
+    "rtaw_marl.cli": 8,
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports() -> dict[str, set[str]]:
+    """Every rtaw_marl module -> the rtaw_marl modules it imports (function bodies too)."""
+    graph: dict[str, set[str]] = {}
+    for path in PACKAGE.rglob("*.py"):
+        name = _module_name(path)
+        targets: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets |= {a.name for a in node.names if a.name.startswith("rtaw_marl")}
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("rtaw_marl"):
+                targets.add(node.module)
+        graph[name] = targets
+    return graph
+
+
+def _layer(module: str) -> tuple[str, int]:
+    best = max((k for k in LAYERS if module == k or module.startswith(k + ".")), key=len)
+    return best, LAYERS[best]
+
+
+def test_every_import_goes_down_the_layers() -> None:
+    upward = []
+    for module, targets in _imports().items():
+        own, rank = _layer(module)
+        for target in targets:
+            other, other_rank = _layer(target)
+            if other_rank > rank:
+                upward.append(f"{module} ({own}) imports {target} ({other})")
+    assert not upward, "\n".join(sorted(upward))
+
+
+def test_no_import_cycles_between_modules() -> None:
+    graph = _imports()
+    names = set(graph)
+
+    def resolve(target: str) -> str | None:
+        # "from rtaw_marl.sim import core" names a package; count it as the package module.
+        while target and target not in names:
+            target = target.rpartition(".")[0]
+        return target or None
+
+    edges = {m: {t for t in map(resolve, ts) if t and t != m} for m, ts in graph.items()}
+    # A package's __init__ importing its own submodules is not a cycle of the layers.
+    edges = {m: {t for t in ts if not t.startswith(m + ".")} for m, ts in edges.items()}
+    state: dict[str, int] = {}
+    cycles: list[list[str]] = []
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = 1
+        for nxt in sorted(edges[node]):
+            if state.get(nxt) == 1:
+                cycles.append([*stack[stack.index(nxt) :], nxt])
+            elif nxt not in state:
+                visit(nxt, [*stack, nxt])
+        state[node] = 2
+
+    for node in sorted(edges):
+        if node not in state:
+            visit(node, [node])
+    assert not cycles, cycles
+
+
+@pytest.mark.parametrize(
+    ("module", "absent"),
+    [
+        ("rtaw_marl", ("torch", "pettingzoo", "hydra")),
+        ("rtaw_marl.sim", ("torch", "pettingzoo", "hydra")),
+        ("rtaw_marl.sim.builder", ("torch", "pettingzoo", "hydra", "omegaconf")),
+        ("rtaw_marl.sim.mapf", ("torch", "pettingzoo", "hydra")),
+        ("rtaw_marl.envs.pettingzoo", ("torch", "torchrl", "hydra")),
+        ("rtaw_marl.config", ("torch", "torchrl")),
+    ],
+)
+def test_light_imports_stay_light(module: str, absent: tuple[str, ...]) -> None:
+    """Importing the simulator loads no torch; the env loads no torch; configs no torch."""
+    code = f"import sys, {module}; print(sorted(m for m in {absent!r} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
