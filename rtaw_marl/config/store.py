@@ -16,7 +16,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig
 from rtaw_marl.models.config import MODELS
-from rtaw_marl.sim.core import SimConfig
+from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import PPOConfig, TrainConfig
 

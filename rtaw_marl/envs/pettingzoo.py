@@ -139,7 +139,7 @@ class raw_env(AECEnv):
                 mapping/typed option with their keys.
             tasks: A task-stream option (default ``"designated"``).
             render_mode: ``None`` or ``"ansi"``.
-            **env: Simulator keys (:class:`~rtaw_marl.sim.core.SimConfig`:
+            **env: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`:
                 ``num_robots``, ``num_tasks``, ``queue_len``, ``episode_mode``,
                 ``noise_mean``, ``noise_var``, ``reward``, ``robot_starts``,
                 ``robot_free_times``); an unknown key is a ``ConfigError`` listing them.

@@ -37,7 +37,7 @@ from torchrl.envs import EnvBase
 from rtaw_marl.envs.features import OBSERVATION_KEYS, robot_features, task_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimFactory, SimSpec
-from rtaw_marl.sim.core import SimBuffers
+from rtaw_marl.sim.config import SimBuffers
 
 __all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]
 

@@ -14,7 +14,7 @@ class EvalConfig:
     """An ``rtaw-eval`` run.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.core.SimConfig`).
+        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
         layout: A layout option (:mod:`rtaw_marl.sim.options`).
         navigator: A navigator option.
         tasks: A task-stream option.
@@ -48,7 +48,7 @@ class RenderConfig:
     """An ``rtaw-render`` run: one episode of one policy, saved as an animated GIF.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.core.SimConfig`).
+        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
         layout: A layout option.
         navigator: A collision-aware navigator option (``sipp`` or ``cbs``).
         tasks: A task-stream option.

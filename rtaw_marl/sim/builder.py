@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.sim.core import SimBuffers, SimConfig, WarehouseSim
+from rtaw_marl.sim.config import SimBuffers, SimConfig
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.options import (

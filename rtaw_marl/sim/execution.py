@@ -36,7 +36,7 @@ __all__ = ["EpisodeRecords", "Executor", "InstantTravel", "SimSettings", "check_
 
 
 class SimSettings(Protocol):
-    """The simulator settings an executor reads (a :class:`~rtaw_marl.sim.core.SimConfig`).
+    """The simulator settings an executor reads (a :class:`~rtaw_marl.sim.config.SimConfig`).
 
     A protocol rather than the class itself, so that this module does not import the
     simulator that imports it.

@@ -80,7 +80,7 @@ class TrainConfig:
     """A whole ``rtaw-train`` run.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.core.SimConfig`).
+        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
         layout: A layout option (:mod:`rtaw_marl.sim.options`).
         navigator: A navigator option.
         tasks: A task-stream option.

@@ -83,11 +83,11 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``."""
     _check(cfg)
     run_dir = Path(run_dir)
-    last_path, best_path = run_dir / "checkpoints" / "last.pt", run_dir / "checkpoints" / "best.pt"
-    if last_path.exists() and not cfg.resume:
+    if (run_dir / "checkpoints" / "last.pt").exists() and not cfg.resume:
         raise ConfigError(
-            f"{run_dir} already holds a training run; pass resume={last_path} "
-            "to continue it, or choose another output_dir"
+            f"{run_dir} already holds a training run; pass "
+            f"resume={run_dir / 'checkpoints' / 'last.pt'} to continue it, or choose another "
+            "output_dir"
         )
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(int(cfg.torch_threads))
@@ -103,6 +103,7 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         batch_size=cfg.algo.minibatch_size,
     )
     logger = RunLogger(run_dir, cfg.logger)
+    saver = Checkpoints(cfg, run_dir / "checkpoints", learner, progress)
     reward_scale = cfg.algo.reward_scale or 1.0 / evaluator.env.scale
     bar = tqdm(total=cfg.frames, initial=progress.frames, unit="fr", disable=not cfg.progress)
     start = time.perf_counter()
@@ -111,10 +112,7 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         row = evaluator.run(learner.actor_net, progress, time.perf_counter() - start)
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
         bar.set_postfix(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
-        payload = _checkpoint_payload(cfg, learner, progress, row)
-        save_checkpoint(last_path, payload)
-        if row["ttd"] <= progress.best_ttd:
-            save_checkpoint(best_path, payload)
+        saver.save(row)
 
     next_eval = progress.frames + cfg.eval.every_frames
     try:
@@ -140,14 +138,9 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         logger.close()
     plot_training_curve(evaluator.history, run_dir / "training_curve.png")
     return TrainResult(
-        run_dir,
-        last_path,
-        best_path,
-        progress.frames,
-        evaluator.mpdm_ttd,
-        progress.best_ttd,
-        evaluator.history,
-    )
+        run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
+        progress.best_ttd, evaluator.history,
+    )  # fmt: skip
 
 
 # --------------------------------------------------------------------------- building
@@ -253,22 +246,39 @@ def _plain_model(cfg: TrainConfig) -> dict[str, int]:
     return model
 
 
-def _checkpoint_payload(
-    cfg: TrainConfig, learner: Learner, progress: Progress, row: dict[str, float]
-) -> dict:
-    return {
-        "model": {
-            "actor": learner.actor_net.state_dict(),
-            "critic": learner.critic_net.state_dict(),
-        },
-        "model_config": _plain_model(cfg),
-        "optimizer": learner.optim.state_dict(),
-        "config": as_plain(cfg),
-        "frames": progress.frames,
-        "iteration": progress.iteration,
-        "best_ttd": progress.best_ttd,
-        "eval": row,
-    }
+class Checkpoints:
+    """``last.pt`` after every evaluation, ``best.pt`` when the evaluation is the best yet.
+
+    Args:
+        cfg: The run's config (stored in every checkpoint).
+        folder: ``<run_dir>/checkpoints``.
+        learner: The networks and optimizer to save.
+        progress: The run's progress (frames, iteration, best TTD).
+    """
+
+    def __init__(self, cfg: TrainConfig, folder: Path, learner: Learner, progress: Progress):
+        self.cfg, self.learner, self.progress = cfg, learner, progress
+        self.last, self.best = folder / "last.pt", folder / "best.pt"
+
+    def save(self, row: dict[str, float]) -> None:
+        """Write ``last.pt`` (and ``best.pt``) with the evaluation ``row``."""
+        learner, progress = self.learner, self.progress
+        payload = {
+            "model": {
+                "actor": learner.actor_net.state_dict(),
+                "critic": learner.critic_net.state_dict(),
+            },
+            "model_config": _plain_model(self.cfg),
+            "optimizer": learner.optim.state_dict(),
+            "config": as_plain(self.cfg),
+            "frames": progress.frames,
+            "iteration": progress.iteration,
+            "best_ttd": progress.best_ttd,
+            "eval": row,
+        }
+        save_checkpoint(self.last, payload)
+        if row["ttd"] <= progress.best_ttd:
+            save_checkpoint(self.best, payload)
 
 
 # --------------------------------------------------------------------------- evaluation

@@ -19,7 +19,8 @@ from rtaw_marl.policies import (
     make_baseline,
 )
 from rtaw_marl.sim.builder import SimSpec
-from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.navigation import DirectNavigator
 from rtaw_marl.sim.tasks import FixedTasks

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.navigation import DirectNavigator
 from rtaw_marl.sim.tasks import POC_TASKS, FixedTasks

@@ -13,7 +13,8 @@ from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS, RandomPolicy
 from rtaw_marl.policies.baselines import BaselinePolicy
 from rtaw_marl.sim.builder import SimSpec
-from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.navigation import AStarNavigator, DirectNavigator
 from rtaw_marl.sim.tasks import TWO_TASKS, FixedTasks, RandomTasks

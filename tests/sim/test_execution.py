@@ -14,7 +14,8 @@ import pytest
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec
-from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.execution import InstantTravel
 from rtaw_marl.sim.layout import shelf_grid
 from rtaw_marl.sim.navigation import AStarNavigator

@@ -15,7 +15,8 @@ from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError, Pla
 from rtaw_marl.evaluation.evaluate import run_episode
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec
-from rtaw_marl.sim.core import SimConfig, WarehouseSim
+from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.mapf import CBSExecutor, Schedule, SIPPExecutor, check_schedule
 from rtaw_marl.sim.navigation import AStarNavigator

@@ -1,0 +1,126 @@
+"""The simulator's parameters (:class:`SimConfig`, the ``env.*`` keys) and the arrays it
+keeps its state in (:class:`SimBuffers`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from rtaw_marl.errors import ConfigError
+
+__all__ = ["EPISODE_MODES", "REWARDS", "SimBuffers", "SimConfig"]
+
+EPISODE_MODES = ("drain", "paper")
+#: Reward = minus this quantity of the chosen task (the paper's reward ablation).
+REWARDS = ("ttd", "length", "ttd_length")
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Parameters of the simulator (the ``env.*`` config keys).
+
+    Attributes:
+        num_robots: ``M``, at least 1.
+        num_tasks: Tasks served (``drain``) or decisions taken (``paper``) per episode.
+        queue_len: ``N``, the number of visible queued tasks, at least 1.
+        episode_mode: ``"drain"`` or ``"paper"``.
+        noise_mean: Mean of the Gaussian noise added to completion times (seconds).
+        noise_var: Its variance; 0 makes the dynamics deterministic.
+        reward: ``"ttd"`` (default), ``"length"`` or ``"ttd_length"``.
+        robot_starts: ``(x, y)`` start cell per robot; random distinct free cells from
+            the episode seed when ``None``.
+        robot_free_times: Time at which each robot is first free; all 0 when ``None``.
+    """
+
+    num_robots: int = 10
+    num_tasks: int = 500
+    queue_len: int = 10
+    episode_mode: str = "drain"
+    noise_mean: float = 0.25
+    noise_var: float = 0.25
+    reward: str = "ttd"
+    robot_starts: list[list[int]] | None = None
+    robot_free_times: list[float] | None = None
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in ("num_robots", "num_tasks", "queue_len"):
+                if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                    raise ConfigError(f"env.{f.name} must be an integer, got {value!r}")
+                if value < 1:
+                    raise ConfigError(f"env.{f.name} must be >= 1, got {value}")
+        if self.episode_mode not in EPISODE_MODES:
+            raise ConfigError(
+                f"env.episode_mode must be one of {', '.join(EPISODE_MODES)}, "
+                f"got {self.episode_mode!r}"
+            )
+        if self.reward not in REWARDS:
+            raise ConfigError(
+                f"env.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}"
+            )
+        if not self.noise_var >= 0:
+            raise ConfigError(f"env.noise_var must be >= 0, got {self.noise_var}")
+        if not np.isfinite(self.noise_mean):
+            raise ConfigError(f"env.noise_mean must be finite, got {self.noise_mean}")
+        if self.robot_starts is not None:
+            starts = tuple(tuple(s) for s in self.robot_starts)
+            if len(starts) != self.num_robots or any(len(s) != 2 for s in starts):
+                raise ConfigError(
+                    f"env.robot_starts must hold num_robots={self.num_robots} [x, y] pairs, "
+                    f"got {len(starts)} entries"
+                )
+            object.__setattr__(self, "robot_starts", starts)
+        if self.robot_free_times is not None:
+            times = tuple(float(t) for t in self.robot_free_times)
+            if len(times) != self.num_robots or not all(np.isfinite(t) and t >= 0 for t in times):
+                raise ConfigError(
+                    f"env.robot_free_times must hold num_robots={self.num_robots} finite "
+                    "non-negative times"
+                )
+            object.__setattr__(self, "robot_free_times", times)
+
+
+@dataclass(frozen=True)
+class SimBuffers:
+    """Arrays a simulator keeps its state in, overwritten in place at every reset and step.
+
+    A batched env passes views into ``[B, ...]`` arrays here, so features of all ``B``
+    simulators are computed with one vectorised expression.
+
+    Attributes:
+        robot_xy: ``int64 [M, 2]`` cell of each robot when next free.
+        robot_free_at: ``float64 [M]`` time each robot becomes free.
+        queue_mask: ``bool [N]`` which slots hold a task.
+        queue_rows: ``int64 [N, 4]`` ``(ox, oy, dx, dy)`` per slot, zeros when empty.
+        queue_length: ``float64 [N]`` task length per slot, 0 when empty.
+    """
+
+    robot_xy: np.ndarray
+    robot_free_at: np.ndarray
+    queue_mask: np.ndarray
+    queue_rows: np.ndarray
+    queue_length: np.ndarray
+
+    @classmethod
+    def allocate(cls, num_robots: int, queue_len: int) -> SimBuffers:
+        """Fresh buffers for ``num_robots`` robots and ``queue_len`` slots."""
+        return cls(
+            robot_xy=np.zeros((num_robots, 2), dtype=np.int64),
+            robot_free_at=np.zeros(num_robots, dtype=np.float64),
+            queue_mask=np.zeros(queue_len, dtype=bool),
+            queue_rows=np.zeros((queue_len, 4), dtype=np.int64),
+            queue_length=np.zeros(queue_len, dtype=np.float64),
+        )
+
+    def check(self, num_robots: int, queue_len: int) -> None:
+        """Raise ConfigError unless shapes and dtypes fit ``num_robots`` and ``queue_len``."""
+        expected = SimBuffers.allocate(num_robots, queue_len)
+        for f in fields(self):
+            got, want = getattr(self, f.name), getattr(expected, f.name)
+            if got.shape != want.shape or got.dtype != want.dtype:
+                raise ConfigError(
+                    f"buffer {f.name} must be {want.dtype} {want.shape}, "
+                    f"got {got.dtype} {got.shape}"
+                )

@@ -1,0 +1,107 @@
+"""The simulator's options: one typed dataclass per layout, navigator and task stream.
+
+Each dataclass is the schema of one Hydra option (``layout=shelves``, ``navigator=cbs``,
+``tasks=designated``, ...): its fields are that option's keys and their defaults, written
+here once. The YAML twins in ``rtaw_marl/conf/`` only point at these schemas
+(:mod:`rtaw_marl.config.store` registers them), and plain Python code builds the same
+objects by name (:func:`layout_option` and friends). Every option builds its part:
+``LayoutOption.build() -> Layout``, ``NavigatorOption.navigator(layout) -> Navigator``
+plus ``NavigatorOption.executor()`` (``None``: robots travel independently),
+``TaskOption.build() -> TaskStream``.
+
+This package is plain Python (no Hydra, no torch): the config layer above imports it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.options.base import Option, option_from
+from rtaw_marl.sim.options.layouts import (
+    LAYOUTS,
+    FileLayoutConfig,
+    GivenLayout,
+    LayoutOption,
+    OpenLayoutConfig,
+    PresetLayoutConfig,
+    ShelvesLayoutConfig,
+    WarehouseLayoutConfig,
+)
+from rtaw_marl.sim.options.navigators import (
+    NAVIGATORS,
+    AStarConfig,
+    CBSConfig,
+    DirectConfig,
+    NavigatorOption,
+    SIPPConfig,
+)
+from rtaw_marl.sim.options.tasks import (
+    TASK_STREAMS,
+    ClusteredTasksConfig,
+    DesignatedTasksConfig,
+    FileTasksConfig,
+    GivenTasks,
+    PocTasksConfig,
+    RandomTasksConfig,
+    StationTasksConfig,
+    TaskOption,
+    TwoTaskConfig,
+)
+from rtaw_marl.sim.tasks import TaskStream
+
+__all__ = [
+    "LAYOUTS",
+    "NAVIGATORS",
+    "TASK_STREAMS",
+    "AStarConfig",
+    "CBSConfig",
+    "ClusteredTasksConfig",
+    "DesignatedTasksConfig",
+    "DirectConfig",
+    "FileLayoutConfig",
+    "FileTasksConfig",
+    "GivenLayout",
+    "GivenTasks",
+    "LayoutOption",
+    "NavigatorOption",
+    "OpenLayoutConfig",
+    "Option",
+    "PocTasksConfig",
+    "PresetLayoutConfig",
+    "RandomTasksConfig",
+    "SIPPConfig",
+    "ShelvesLayoutConfig",
+    "StationTasksConfig",
+    "TaskOption",
+    "TwoTaskConfig",
+    "WarehouseLayoutConfig",
+    "layout_option",
+    "navigator_option",
+    "option_from",
+    "task_option",
+]
+
+
+def layout_option(spec: str | Mapping[str, Any] | LayoutOption | Layout) -> LayoutOption:
+    """A layout option from a name (``shelves``), a file path, a mapping, a
+    :class:`Layout` or itself."""
+    if isinstance(spec, Layout):
+        return GivenLayout(layout=spec)
+    if isinstance(spec, str) and spec not in LAYOUTS and "." in spec:
+        return FileLayoutConfig(path=spec)
+    return option_from(LAYOUTS, "layout", spec)  # type: ignore[return-value]
+
+
+def navigator_option(spec: str | Mapping[str, Any] | NavigatorOption) -> NavigatorOption:
+    """A navigator option from a name (``astar``), a mapping or itself."""
+    return option_from(NAVIGATORS, "navigator", spec)  # type: ignore[return-value]
+
+
+def task_option(spec: str | Mapping[str, Any] | TaskOption | TaskStream) -> TaskOption:
+    """A task-stream option from a name (``designated``), a mapping, a
+    :class:`TaskStream` or itself."""
+    if isinstance(spec, TaskStream):
+        return GivenTasks(stream=spec)
+    return option_from(TASK_STREAMS, "tasks", spec)  # type: ignore[return-value]

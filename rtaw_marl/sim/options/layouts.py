@@ -1,0 +1,183 @@
+"""Layout options (the ``layout`` config group): one dataclass per generator or file."""
+
+from __future__ import annotations
+
+import dataclasses
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
+from rtaw_marl.sim.options.base import Option
+from rtaw_marl.sim.warehouse_layouts import warehouse_grid, warehouse_preset
+
+__all__ = [
+    "LAYOUTS",
+    "FileLayoutConfig",
+    "GivenLayout",
+    "LayoutOption",
+    "OpenLayoutConfig",
+    "PresetLayoutConfig",
+    "ShelvesLayoutConfig",
+    "WarehouseLayoutConfig",
+]
+
+
+@dataclass(kw_only=True)
+class LayoutOption(Option, ABC):
+    """A layout option.
+
+    Attributes:
+        path: A layout file (SBPL ``.cfg``, MovingAI ``.map`` or ASCII) loaded instead of
+            the generated layout when set, with any ``layout=``.
+    """
+
+    group: ClassVar[str] = "layout"
+    path: str | None = None
+
+    def build(self) -> Layout:
+        """The layout this option describes."""
+        if self.path is not None:
+            return load_layout(self.path)
+        return self._generate()
+
+    @abstractmethod
+    def _generate(self) -> Layout:
+        """The generated layout (used when ``path`` is not set)."""
+
+
+@dataclass(kw_only=True)
+class OpenLayoutConfig(LayoutOption):
+    """An obstacle-free grid (the paper's "Direct" setting).
+
+    Attributes:
+        width: Columns.
+        height: Rows.
+    """
+
+    name: str = "open"
+    width: int = 60
+    height: int = 60
+
+    def _generate(self) -> Layout:
+        return open_grid(self.width, self.height)
+
+
+@dataclass(kw_only=True)
+class ShelvesLayoutConfig(LayoutOption):
+    """Rows of shelf blocks separated by aisles.
+
+    Attributes:
+        width: Columns.
+        height: Rows.
+        shelf_width: Shelf block width in cells.
+        shelf_height: Shelf block height in cells.
+        aisle: Free cells between blocks.
+        margin: Free cells along the edges.
+    """
+
+    name: str = "shelves"
+    width: int = 60
+    height: int = 60
+    shelf_width: int = 8
+    shelf_height: int = 2
+    aisle: int = 2
+    margin: int = 3
+
+    def _generate(self) -> Layout:
+        return shelf_grid(
+            self.width, self.height, self.shelf_width, self.shelf_height, self.aisle, self.margin
+        )
+
+
+@dataclass(kw_only=True)
+class WarehouseLayoutConfig(LayoutOption):
+    """The parametric warehouse generator (shelf blocks, aisles, highways, stations).
+
+    Attributes:
+        width: Columns.
+        height: Rows.
+        shelf_width: Shelf block width in cells.
+        shelf_height: Shelf block height in cells.
+        aisle_x: Free columns between blocks.
+        aisle_y: Free rows between blocks.
+        highway_every: Widen every k-th aisle to ``highway_width`` (0: no highways).
+        highway_width: Width of a highway in cells.
+        margin: Free cells along the edges.
+        station_spacing: Rows between delivery stations in the edge columns.
+    """
+
+    name: str = "warehouse"
+    width: int = 60
+    height: int = 60
+    shelf_width: int = 8
+    shelf_height: int = 2
+    aisle_x: int = 2
+    aisle_y: int = 2
+    highway_every: int = 0
+    highway_width: int = 3
+    margin: int = 2
+    station_spacing: int = 4
+
+    def _generate(self) -> Layout:
+        params = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        del params["name"], params["path"]
+        return warehouse_grid(**params)
+
+
+@dataclass(kw_only=True)
+class PresetLayoutConfig(LayoutOption):
+    """One of the paper's warehouses, generated at any size.
+
+    Attributes:
+        preset: ``A``-``E`` (the paper's compactness levels; docs/simulator.md).
+        width: Columns.
+        height: Rows.
+    """
+
+    name: str = "preset"
+    preset: str
+    width: int = 60
+    height: int = 60
+
+    def _generate(self) -> Layout:
+        return warehouse_preset(self.preset, self.width, self.height)
+
+
+@dataclass(kw_only=True)
+class FileLayoutConfig(LayoutOption):
+    """A layout file: SBPL ``.cfg``, MovingAI ``.map`` or ASCII (``.`` free, ``@`` blocked).
+
+    Attributes:
+        path: The file (required).
+    """
+
+    name: str = "file"
+    path: str | None = field()  # required: no default
+
+    def _generate(self) -> Layout:
+        raise ConfigError("layout=file needs layout.path=FILE")
+
+
+@dataclass(kw_only=True)
+class GivenLayout(LayoutOption):
+    """A :class:`Layout` built in Python (not a Hydra option: it is not serializable)."""
+
+    name: str = "given"
+    layout: Layout
+
+    def _generate(self) -> Layout:
+        return self.layout
+
+
+LAYOUTS: dict[str, type[LayoutOption]] = {
+    cls.__dataclass_fields__["name"].default: cls
+    for cls in (
+        OpenLayoutConfig,
+        ShelvesLayoutConfig,
+        WarehouseLayoutConfig,
+        PresetLayoutConfig,
+        FileLayoutConfig,
+    )
+}

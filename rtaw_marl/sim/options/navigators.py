@@ -1,0 +1,117 @@
+"""Navigator options (the ``navigator`` config group): the distance model the policies
+observe, and the executor that moves the robots."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.execution import Executor
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.mapf import CBSExecutor, SIPPExecutor
+from rtaw_marl.sim.navigation import AStarNavigator, DirectNavigator, Navigator
+from rtaw_marl.sim.options.base import Option
+
+__all__ = [
+    "NAVIGATORS",
+    "AStarConfig",
+    "CBSConfig",
+    "DirectConfig",
+    "NavigatorOption",
+    "SIPPConfig",
+]
+
+
+@dataclass(kw_only=True)
+class NavigatorOption(Option):
+    """A navigator option: the distance model the policies observe, and how robots travel
+    (independently, or executed collision-free by a path-planning fleet)."""
+
+    group: ClassVar[str] = "navigator"
+    #: Whether robots occupy cells and wait for each other.
+    collision_aware: ClassVar[bool] = False
+
+    def navigator(self, layout: Layout) -> Navigator:
+        """The distance model on ``layout`` (shared by every simulator of a batch)."""
+        return AStarNavigator(layout)
+
+    def executor(self) -> Executor | None:
+        """A fresh executor for one simulator; ``None`` means instant, independent travel."""
+        return None
+
+
+@dataclass(kw_only=True)
+class DirectConfig(NavigatorOption):
+    """Euclidean distances, obstacles ignored (the paper's "Direct" navigation)."""
+
+    name: str = "direct"
+
+    def navigator(self, layout: Layout) -> Navigator:
+        return DirectNavigator(layout)
+
+
+@dataclass(kw_only=True)
+class AStarConfig(NavigatorOption):
+    """True 4-connected shortest paths (cached BFS distance fields)."""
+
+    name: str = "astar"
+
+
+@dataclass(kw_only=True)
+class SIPPConfig(NavigatorOption):
+    """Collision-aware: prioritized Safe Interval Path Planning on the shared grid; the
+    policy observes A* distances.
+
+    Attributes:
+        time_limit: Seconds one planning call may take before the run stops with an error.
+    """
+
+    name: str = "sipp"
+    collision_aware: ClassVar[bool] = True
+    time_limit: float = 10.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check_positive("navigator.time_limit", self.time_limit, "number", float)
+
+    def executor(self) -> Executor:
+        return SIPPExecutor(time_limit=self.time_limit)
+
+
+@dataclass(kw_only=True)
+class CBSConfig(NavigatorOption):
+    """Collision-aware: Conflict-Based Search over all moving robots, re-planned at each
+    assignment; the policy observes A* distances.
+
+    Attributes:
+        time_limit: Seconds one planning call may take before the run stops with an error.
+        max_nodes: High-level CBS nodes per call; past it the new robot plans alone around
+            the others (a deterministic budget; docs/simulator.md).
+    """
+
+    name: str = "cbs"
+    collision_aware: ClassVar[bool] = True
+    time_limit: float = 10.0
+    max_nodes: int = 200
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check_positive("navigator.time_limit", self.time_limit, "number", float)
+        _check_positive("navigator.max_nodes", self.max_nodes, "integer", int)
+
+    def executor(self) -> Executor:
+        return CBSExecutor(time_limit=self.time_limit, max_nodes=self.max_nodes)
+
+
+def _check_positive(key: str, value: object, what: str, kind: type) -> None:
+    numeric = (int,) if kind is int else (int, float)
+    ok = isinstance(value, numeric) and not isinstance(value, bool)
+    if not ok or not 0 < value < float("inf"):  # type: ignore[operator]
+        raise ConfigError(f"{key} must be a positive {what}, got {value!r}")
+
+
+NAVIGATORS: dict[str, type[NavigatorOption]] = {
+    cls.__dataclass_fields__["name"].default: cls
+    for cls in (DirectConfig, AStarConfig, SIPPConfig, CBSConfig)
+}

@@ -1,0 +1,167 @@
+"""Task-stream options (the ``tasks`` config group)."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+from rtaw_marl.sim.options.base import Option
+from rtaw_marl.sim.tasks import (
+    DEFAULT_CENTRES,
+    POC_TASKS,
+    TWO_TASKS,
+    ClusteredTasks,
+    DesignatedTasks,
+    FixedTasks,
+    RandomTasks,
+    StationTasks,
+    TaskStream,
+    load_task_csv,
+)
+
+__all__ = [
+    "TASK_STREAMS",
+    "ClusteredTasksConfig",
+    "DesignatedTasksConfig",
+    "FileTasksConfig",
+    "GivenTasks",
+    "PocTasksConfig",
+    "RandomTasksConfig",
+    "StationTasksConfig",
+    "TaskOption",
+    "TwoTaskConfig",
+]
+
+
+@dataclass(kw_only=True)
+class TaskOption(Option, ABC):
+    """A task-stream option."""
+
+    group: ClassVar[str] = "tasks"
+
+    @abstractmethod
+    def build(self) -> TaskStream:
+        """The task stream this option describes."""
+
+
+@dataclass(kw_only=True)
+class RandomTasksConfig(TaskOption):
+    """Origin and destination uniform over the free cells."""
+
+    name: str = "random"
+
+    def build(self) -> TaskStream:
+        return RandomTasks()
+
+
+@dataclass(kw_only=True)
+class DesignatedTasksConfig(TaskOption):
+    """Gaussian pickup and delivery regions around fixed centres.
+
+    Attributes:
+        pickup_centres: ``[x, y]`` centres of the pickup regions (default: the original
+            RTAW code's five centres).
+        delivery_centres: ``[x, y]`` centres of the delivery regions.
+        sigma: Standard deviation of every region, in cells.
+    """
+
+    name: str = "designated"
+    pickup_centres: list[list[float]] = field(default_factory=lambda: _centres())
+    delivery_centres: list[list[float]] = field(default_factory=lambda: _centres())
+    sigma: float = 5.0
+
+    def build(self) -> TaskStream:
+        return DesignatedTasks(self.pickup_centres, self.delivery_centres, self.sigma)
+
+
+@dataclass(kw_only=True)
+class ClusteredTasksConfig(TaskOption):
+    """Tasks around cluster centres drawn per episode on free cells.
+
+    Attributes:
+        num_clusters: Number of clusters.
+        sigma: Standard deviation of every cluster, in cells.
+    """
+
+    name: str = "clustered"
+    num_clusters: int = 5
+    sigma: float = 4.0
+
+    def build(self) -> TaskStream:
+        return ClusteredTasks(self.num_clusters, self.sigma)
+
+
+@dataclass(kw_only=True)
+class StationTasksConfig(TaskOption):
+    """Pickup at the layout's pickup stations, delivery at its delivery stations (needs a
+    generated warehouse layout: ``layout=A``..``E`` or ``warehouse``)."""
+
+    name: str = "stations"
+
+    def build(self) -> TaskStream:
+        return StationTasks()
+
+
+@dataclass(kw_only=True)
+class FileTasksConfig(TaskOption):
+    """A fixed task list: CSV with header ``ox,oy,dx,dy``, one task per row in arrival order.
+
+    Attributes:
+        path: The CSV file (required).
+    """
+
+    name: str = "file"
+    path: str = field()  # required: no default
+
+    def build(self) -> TaskStream:
+        return load_task_csv(self.path)
+
+
+@dataclass(kw_only=True)
+class PocTasksConfig(TaskOption):
+    """The paper's proof-of-concept list of 5 tasks (appendix)."""
+
+    name: str = "poc"
+
+    def build(self) -> TaskStream:
+        return FixedTasks(POC_TASKS, name="poc tasks")
+
+
+@dataclass(kw_only=True)
+class TwoTaskConfig(TaskOption):
+    """The paper's two-task setting: the queue always holds (0,0)->(3,3) and (0,0)->(9,9)."""
+
+    name: str = "two_task"
+
+    def build(self) -> TaskStream:
+        return FixedTasks(TWO_TASKS, refill_same_slot=True, name="two-task tasks")
+
+
+@dataclass(kw_only=True)
+class GivenTasks(TaskOption):
+    """A :class:`TaskStream` built in Python (not a Hydra option: it is not serializable)."""
+
+    name: str = "given"
+    stream: TaskStream
+
+    def build(self) -> TaskStream:
+        return self.stream
+
+
+TASK_STREAMS: dict[str, type[TaskOption]] = {
+    cls.__dataclass_fields__["name"].default: cls
+    for cls in (
+        RandomTasksConfig,
+        DesignatedTasksConfig,
+        ClusteredTasksConfig,
+        StationTasksConfig,
+        FileTasksConfig,
+        PocTasksConfig,
+        TwoTaskConfig,
+    )
+}
+
+
+def _centres() -> list[list[float]]:
+    return [[float(x), float(y)] for x, y in DEFAULT_CENTRES]
