@@ -11,10 +11,12 @@ from pathlib import Path
 
 import matplotlib
 
+from rtaw_marl.sim.options import PresetLayoutConfig
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from rtaw_marl.sim.warehouse_layouts import PRESETS, warehouse_preset
+from rtaw_marl.sim.warehouse_layouts import PRESETS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -24,7 +26,7 @@ def main() -> int:
     (DOCS / "img").mkdir(parents=True, exist_ok=True)
     fig, axes = plt.subplots(1, len(PRESETS), figsize=(3 * len(PRESETS), 3.2), dpi=100)
     for ax, preset in zip(axes, PRESETS, strict=True):
-        layout = warehouse_preset(preset)
+        layout = PresetLayoutConfig(preset=preset).build()
         (DOCS / "layouts" / f"{preset}.txt").write_text(layout.to_ascii() + "\n")
         image = (~layout.obstacles).astype(float)
         image[layout.pickup] = 0.75

@@ -199,7 +199,7 @@ class Layout:
         return "\n".join("".join(row) for row in chars)
 
 
-def open_grid(width: int = 60, height: int = 60) -> Layout:
+def open_grid(width: int, height: int) -> Layout:
     """An obstacle-free ``width x height`` grid (the paper's "Direct" setting)."""
     if int(width) < 1 or int(height) < 1:
         raise LayoutError(f"open grid size must be at least 1x1, got {width}x{height}")
@@ -207,12 +207,12 @@ def open_grid(width: int = 60, height: int = 60) -> Layout:
 
 
 def shelf_grid(
-    width: int = 60,
-    height: int = 60,
-    shelf_width: int = 8,
-    shelf_height: int = 2,
-    aisle: int = 2,
-    margin: int = 3,
+    width: int,
+    height: int,
+    shelf_width: int,
+    shelf_height: int,
+    aisle: int,
+    margin: int,
 ) -> Layout:
     """A simple warehouse: rows of rectangular shelf blocks separated by aisles.
 

@@ -112,9 +112,9 @@ class DesignatedTasks(TaskStream):
 
     def __init__(
         self,
-        pickup_centres: Sequence[Sequence[float]] = DEFAULT_CENTRES,
-        delivery_centres: Sequence[Sequence[float]] = DEFAULT_CENTRES,
-        sigma: float = 5.0,
+        pickup_centres: Sequence[Sequence[float]],
+        delivery_centres: Sequence[Sequence[float]],
+        sigma: float,
     ) -> None:
         self.pickup_centres = _centres(pickup_centres, "pickup_centres")
         self.delivery_centres = _centres(delivery_centres, "delivery_centres")
@@ -185,7 +185,7 @@ class ClusteredTasks(TaskStream):
         sigma: Standard deviation of each cluster in cells.
     """
 
-    def __init__(self, num_clusters: int = 5, sigma: float = 4.0) -> None:
+    def __init__(self, num_clusters: int, sigma: float) -> None:
         if int(num_clusters) < 1:
             raise ConfigError(f"tasks.num_clusters must be >= 1, got {num_clusters}")
         if not sigma > 0:

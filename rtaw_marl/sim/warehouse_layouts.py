@@ -19,14 +19,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from rtaw_marl.errors import LayoutError, unknown_name
+from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim.layout import Layout
 
-__all__ = ["PRESETS", "warehouse_grid", "warehouse_preset"]
+__all__ = ["PRESETS", "warehouse_grid"]
 
 _FOUR = ((0, 1), (0, -1), (1, 0), (-1, 0))
 
 #: The paper's five layouts (Fig. "layouts"), as generator parameters.
+#: The paper's layouts A-E as generator parameters, on top of the defaults of
+#: :class:`rtaw_marl.sim.options.WarehouseLayoutConfig` (``layout=A`` ... ``layout=E``).
 PRESETS: dict[str, dict[str, int]] = {
     # very low compactness: small square shelves, wide aisles
     "A": {"shelf_width": 2, "shelf_height": 2, "aisle_x": 3, "aisle_y": 3},
@@ -60,16 +62,16 @@ def _positions(length: int, block: int, aisle: int, margin: int, every: int, wid
 
 
 def warehouse_grid(
-    width: int = 60,
-    height: int = 60,
-    shelf_width: int = 8,
-    shelf_height: int = 2,
-    aisle_x: int = 2,
-    aisle_y: int = 2,
-    highway_every: int = 0,
-    highway_width: int = 3,
-    margin: int = 2,
-    station_spacing: int = 4,
+    width: int,
+    height: int,
+    shelf_width: int,
+    shelf_height: int,
+    aisle_x: int,
+    aisle_y: int,
+    highway_every: int,
+    highway_width: int,
+    margin: int,
+    station_spacing: int,
     name: str | None = None,
 ) -> Layout:
     """Generate a warehouse layout with shelves, aisles, highways and stations.
@@ -122,16 +124,3 @@ def warehouse_grid(
     delivery &= ~grid
     label = name or f"warehouse_{width}x{height}"
     return Layout(grid, name=label, pickup=pickup, delivery=delivery)
-
-
-def warehouse_preset(preset: str, width: int = 60, height: int = 60) -> Layout:
-    """The paper's layout ``preset`` (``"A"`` to ``"E"``) at any size.
-
-    Raises:
-        ConfigError: Unknown preset; the message lists the available ones.
-    """
-    if preset not in PRESETS:
-        raise unknown_name("layout preset", preset, list(PRESETS))
-    return warehouse_grid(
-        width, height, **PRESETS[preset], name=f"layout_{preset}_{width}x{height}"
-    )

@@ -17,8 +17,8 @@ from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.execution import InstantTravel
-from rtaw_marl.sim.layout import shelf_grid
 from rtaw_marl.sim.navigation import AStarNavigator
+from rtaw_marl.sim.options import ShelvesLayoutConfig
 from rtaw_marl.sim.tasks import RandomTasks
 
 NOISELESS = {"noise_mean": 0.0, "noise_var": 0.0}
@@ -90,7 +90,7 @@ def test_collision_aware_schedules_match_the_recorded_fleets(
 
 def test_instant_travel_is_the_default() -> None:
     """executor=None and an explicit InstantTravel give the same episode; no schedule."""
-    layout = shelf_grid(30, 20)
+    layout = ShelvesLayoutConfig(width=30, height=20).build()
     config = SimConfig(num_robots=5, num_tasks=30)
     runs = []
     for executor in (None, InstantTravel()):

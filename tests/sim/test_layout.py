@@ -12,6 +12,7 @@ from scipy import ndimage
 
 from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
+from rtaw_marl.sim.options import ShelvesLayoutConfig
 
 FAST = settings(max_examples=30, deadline=None, database=None)
 
@@ -108,7 +109,7 @@ def test_layout_rejects_bad_grids(grid: np.ndarray, match: str) -> None:
 
 def test_shelf_grid_default_is_connected_and_deterministic() -> None:
     """The default 60x60 shelf grid has shelves, one connected region and is reproducible."""
-    a, b = shelf_grid(), shelf_grid()
+    a, b = ShelvesLayoutConfig().build(), ShelvesLayoutConfig().build()
     assert a.obstacles.shape == (60, 60)
     assert a.obstacles.any()
     assert a.num_components == 1
@@ -157,7 +158,7 @@ def test_shelf_grid_rejects_bad_parameters(kwargs: dict[str, int]) -> None:
     """Non-positive shelf, aisle or margin sizes are LayoutErrors naming the key."""
     key = next(iter(kwargs))
     with pytest.raises(LayoutError, match=key):
-        shelf_grid(**kwargs)
+        ShelvesLayoutConfig(**kwargs).build()
 
 
 # ----------------------------------------------------------------- real data maps

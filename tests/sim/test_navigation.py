@@ -11,14 +11,14 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from rtaw_marl.errors import ConfigError, LayoutError
-from rtaw_marl.sim.layout import Layout, open_grid, shelf_grid
+from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.navigation import (
     AStarNavigator,
     DirectNavigator,
     Navigator,
     TargetSlots,
 )
-from rtaw_marl.sim.options import navigator_option
+from rtaw_marl.sim.options import ShelvesLayoutConfig, navigator_option
 
 FAST = settings(max_examples=30, deadline=None, database=None)
 
@@ -68,7 +68,7 @@ def _assert_valid_path(layout: Layout, path: np.ndarray, a: tuple[int, int], b: 
 @given(arrays(np.int64, (6, 4), elements=st.integers(-50, 50)))
 def test_direct_distance_is_hypot(xy: np.ndarray) -> None:
     """Direct distances (row-wise and matrix) are the Euclidean hypot, obstacles ignored."""
-    nav = DirectNavigator(shelf_grid(20, 20))
+    nav = DirectNavigator(ShelvesLayoutConfig(width=20, height=20).build())
     a, b = xy[:, :2], xy[:, 2:]
     expected = [np.hypot(*(p - q)) for p, q in zip(a, b, strict=True)]
     np.testing.assert_allclose(nav.distance(a, b), expected, rtol=1e-12)
@@ -173,7 +173,9 @@ def test_astar_detours_around_shelves() -> None:
 def test_target_slots_match_distance_matrix(nav_name: str) -> None:
     """TargetSlots (set, distances_from, distances_from_one, distance_to) agree with
     distance_matrix, including after a slot is re-targeted."""
-    layout = shelf_grid(24, 18, shelf_width=4, shelf_height=2, aisle=2, margin=2)
+    layout = ShelvesLayoutConfig(
+        width=24, height=18, shelf_width=4, shelf_height=2, aisle=2, margin=2
+    ).build()
     nav: Navigator = navigator_option(nav_name).navigator(layout)
     rng = np.random.default_rng(7)
     cells = layout.main_cells
@@ -247,7 +249,9 @@ def test_make_navigator() -> None:
 def test_lru_eviction_keeps_answers_right() -> None:
     """With a tiny field cache (64 fields) fields are evicted and recomputed, and distances
     (batched, matrix, path, slots) stay equal to the BFS."""
-    layout = shelf_grid(16, 14, shelf_width=3, shelf_height=2, aisle=1, margin=1)
+    layout = ShelvesLayoutConfig(
+        width=16, height=14, shelf_width=3, shelf_height=2, aisle=1, margin=1
+    ).build()
     nav = AStarNavigator(layout, cache_mb=1e-9)
     cells = layout.main_cells
     assert len(cells) > 100

@@ -8,8 +8,13 @@ import numpy as np
 import pytest
 
 from rtaw_marl.errors import ConfigError, LayoutError, TaskFileError
-from rtaw_marl.sim.layout import Layout, open_grid, shelf_grid
-from rtaw_marl.sim.options import layout_option, task_option
+from rtaw_marl.sim.layout import Layout, open_grid
+from rtaw_marl.sim.options import (
+    DesignatedTasksConfig,
+    ShelvesLayoutConfig,
+    layout_option,
+    task_option,
+)
 from rtaw_marl.sim.tasks import (
     DEFAULT_CENTRES,
     POC_TASKS,
@@ -44,12 +49,12 @@ def _cells(arr: np.ndarray) -> set[tuple[int, int]]:
 
 @pytest.mark.parametrize(
     "stream",
-    [RandomTasks(), DesignatedTasks(), DesignatedTasks(sigma=1.5)],
+    [RandomTasks(), DesignatedTasksConfig().build(), DesignatedTasksConfig(sigma=1.5).build()],
     ids=["random", "designated", "designated-narrow"],
 )
 def test_random_streams_are_seeded(stream: TaskStream) -> None:
     """Random streams give the same tasks for the same seed and different ones otherwise."""
-    layout = shelf_grid()
+    layout = ShelvesLayoutConfig().build()
     a = stream.generate(_rng(11), layout, 200)
     b = stream.generate(_rng(11), layout, 200)
     c = stream.generate(_rng(12), layout, 200)
@@ -109,9 +114,9 @@ def _mean_nearest_centre(cells: np.ndarray, centres: np.ndarray) -> float:
 def test_designated_tasks_cluster_near_centres() -> None:
     """Designated tasks lie on free main-region cells, have distinct ends, and sit much closer
     to the centres than uniform random tasks; every centre is used."""
-    layout = shelf_grid()
+    layout = ShelvesLayoutConfig().build()
     centres = np.array(DEFAULT_CENTRES, dtype=float)
-    tasks = DesignatedTasks(sigma=2.0).generate(_rng(3), layout, 1000)
+    tasks = DesignatedTasksConfig(sigma=2.0).build().generate(_rng(3), layout, 1000)
     main = _cells(layout.main_cells)
     assert _cells(tasks[:, :2]) <= main
     assert _cells(tasks[:, 2:]) <= main
@@ -138,7 +143,7 @@ def test_designated_separate_pickup_and_delivery_centres() -> None:
 def test_designated_centre_outside_grid(key: str) -> None:
     """A centre outside the layout is a ConfigError naming the centre and the grid size."""
     centres = {"pickup_centres": [(3, 3)], "delivery_centres": [(3, 3)], key: [(3, 3), (70, 2)]}
-    stream = DesignatedTasks(**centres)
+    stream = DesignatedTasksConfig(**centres).build()
     kind = key.split("_")[0]
     with pytest.raises(ConfigError, match=rf"designated {kind} centre \(70, 2\) is outside.*10x10"):
         stream.generate(_rng(0), open_grid(10, 10), 5)
@@ -156,7 +161,7 @@ def test_designated_centre_outside_grid(key: str) -> None:
 def test_designated_rejects_bad_parameters(kwargs: dict[str, object], match: str) -> None:
     """Bad sigma or centre lists are ConfigErrors naming the key."""
     with pytest.raises(ConfigError, match=match):
-        DesignatedTasks(**kwargs)  # type: ignore[arg-type]
+        DesignatedTasksConfig(**kwargs).build()  # type: ignore[arg-type]
 
 
 # ----------------------------------------------------------------- fixed / CSV
@@ -276,7 +281,9 @@ def test_make_layout_builds_layouts(tmp_path: Path) -> None:
         5,
     )
     shelves = layout_option({"name": "shelves", "width": 30, "height": 20, "aisle": 3}).build()
-    assert np.array_equal(shelves.obstacles, shelf_grid(30, 20, aisle=3).obstacles)
+    assert np.array_equal(
+        shelves.obstacles, ShelvesLayoutConfig(width=30, height=20, aisle=3).build().obstacles
+    )
     path = tmp_path / "g.txt"
     path.write_text(".@\n..\n")
     assert layout_option(str(path)).build().obstacles.tolist() == [[False, True], [False, False]]

@@ -7,16 +7,16 @@ import pytest
 
 from rtaw_marl.errors import ConfigError, LayoutError
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.options import layout_option
+from rtaw_marl.sim.options import PresetLayoutConfig, WarehouseLayoutConfig, layout_option
 from rtaw_marl.sim.tasks import ClusteredTasks, StationTasks
-from rtaw_marl.sim.warehouse_layouts import PRESETS, warehouse_grid, warehouse_preset
+from rtaw_marl.sim.warehouse_layouts import PRESETS
 
 COMPACTNESS = {"A": 0.13, "B": 0.56, "C": 0.28, "D": 0.49, "E": 0.24}
 
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))
 def test_presets_are_connected_deterministic_and_pinned(preset: str) -> None:
-    a, b = warehouse_preset(preset), warehouse_preset(preset)
+    a, b = PresetLayoutConfig(preset=preset).build(), PresetLayoutConfig(preset=preset).build()
     assert np.array_equal(a.obstacles, b.obstacles)
     assert (a.width, a.height) == (60, 60)
     assert a.num_components == 1
@@ -25,7 +25,7 @@ def test_presets_are_connected_deterministic_and_pinned(preset: str) -> None:
 
 def test_compactness_levels_match_the_paper() -> None:
     """A very low, C and E low, B and D high (the paper's Fig. "layouts")."""
-    c = {p: warehouse_preset(p).compactness for p in PRESETS}
+    c = {p: PresetLayoutConfig(preset=p).build().compactness for p in PRESETS}
     assert c["A"] < min(c["C"], c["E"])
     assert max(c["C"], c["E"]) < min(c["B"], c["D"])
 
@@ -38,7 +38,9 @@ def test_any_size_layout_c_256() -> None:
 
 
 def test_stations_are_free_and_where_documented() -> None:
-    layout = warehouse_grid(40, 30, shelf_width=5, shelf_height=2, margin=2, station_spacing=3)
+    layout = WarehouseLayoutConfig(
+        width=40, height=30, shelf_width=5, shelf_height=2, margin=2, station_spacing=3
+    ).build()
     pickup, delivery = layout.station_cells("pickup"), layout.station_cells("delivery")
     assert len(pickup)
     assert len(delivery)
@@ -85,16 +87,16 @@ def test_describe_reports_disconnected_regions() -> None:
 )
 def test_bad_generator_parameters(kwargs: dict, message: str) -> None:
     with pytest.raises(LayoutError, match=message):
-        warehouse_grid(**kwargs)
+        WarehouseLayoutConfig(**kwargs).build()
 
 
 def test_unknown_preset_lists_available() -> None:
     with pytest.raises(ConfigError, match="available: A, B, C, D, E"):
-        warehouse_preset("F")
+        PresetLayoutConfig(preset="F").build()
 
 
 def test_clustered_tasks_move_with_the_seed() -> None:
-    layout = warehouse_preset("C")
+    layout = PresetLayoutConfig(preset="C").build()
     stream = ClusteredTasks(num_clusters=3, sigma=2.0)
     a = stream.generate(np.random.default_rng(1), layout, 300)
     b = stream.generate(np.random.default_rng(1), layout, 300)
@@ -108,7 +110,7 @@ def test_clustered_tasks_move_with_the_seed() -> None:
 
 
 def test_station_tasks_use_the_stations() -> None:
-    layout = warehouse_preset("B")
+    layout = PresetLayoutConfig(preset="B").build()
     tasks = StationTasks().generate(np.random.default_rng(0), layout, 200)
     pickup = {tuple(c) for c in layout.station_cells("pickup")}
     delivery = {tuple(c) for c in layout.station_cells("delivery")}
@@ -129,4 +131,6 @@ def test_ascii_exports_in_docs_match_the_generator(preset: str) -> None:
     from rtaw_marl.sim.layout import load_layout
 
     path = Path(__file__).resolve().parents[2] / "docs" / "layouts" / f"{preset}.txt"
-    assert np.array_equal(load_layout(path).obstacles, warehouse_preset(preset).obstacles)
+    assert np.array_equal(
+        load_layout(path).obstacles, PresetLayoutConfig(preset=preset).build().obstacles
+    )

@@ -7,10 +7,10 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
 from rtaw_marl.sim.options.base import Option
-from rtaw_marl.sim.warehouse_layouts import warehouse_grid, warehouse_preset
+from rtaw_marl.sim.warehouse_layouts import PRESETS, warehouse_grid
 
 __all__ = [
     "LAYOUTS",
@@ -121,9 +121,13 @@ class WarehouseLayoutConfig(LayoutOption):
     station_spacing: int = 4
 
     def _generate(self) -> Layout:
+        return self.generate()
+
+    def generate(self, name: str | None = None) -> Layout:
+        """The generated layout, labelled ``name`` (default: from its size)."""
         params = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         del params["name"], params["path"]
-        return warehouse_grid(**params)
+        return warehouse_grid(**params, name=name)
 
 
 @dataclass(kw_only=True)
@@ -142,7 +146,12 @@ class PresetLayoutConfig(LayoutOption):
     height: int = 60
 
     def _generate(self) -> Layout:
-        return warehouse_preset(self.preset, self.width, self.height)
+        if self.preset not in PRESETS:
+            raise unknown_name("layout preset", self.preset, list(PRESETS))
+        generator = WarehouseLayoutConfig(
+            width=self.width, height=self.height, **PRESETS[self.preset]
+        )
+        return generator.generate(name=f"layout_{self.preset}_{self.width}x{self.height}")
 
 
 @dataclass(kw_only=True)

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from rtaw_marl.errors import LayoutError
-from rtaw_marl.sim.layout import Layout, shelf_grid
+from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf import Grid
 from rtaw_marl.sim.navigation import AStarNavigator
+from rtaw_marl.sim.options import ShelvesLayoutConfig
 
 ROWS = ("..@..", ".@@..", ".....")
 
@@ -49,7 +50,7 @@ def test_neighbours_are_free_and_ordered_right_left_down_up() -> None:
 
 
 def test_fields_match_the_astar_navigator() -> None:
-    layout = shelf_grid(20, 14)
+    layout = ShelvesLayoutConfig(width=20, height=14).build()
     grid, nav = Grid.from_layout(layout), AStarNavigator(layout)
     cells = layout.free_cells[::7]
     for x, y in cells[:10].tolist():
