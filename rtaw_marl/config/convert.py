@@ -95,7 +95,11 @@ def config_error(exc: BaseException) -> RtawError:
     cause = exc
     while not isinstance(cause, OmegaConfBaseException) and cause.__cause__ is not None:
         cause = cause.__cause__
-    first = str(cause).strip().splitlines()[0] if str(cause).strip() else type(cause).__name__
+    lines = [line.strip() for line in str(cause).splitlines() if line.strip()]
+    first = lines[0] if lines else type(cause).__name__
+    if first.endswith(":") and len(lines) > 1:
+        # Hydra's "X raised while composing config:" puts the reason on the next line.
+        first = f"{first} {lines[1]}"
     key = getattr(cause, "full_key", None)
     if isinstance(cause, OmegaConfBaseException) and key:
         valid = _valid_keys(cause)

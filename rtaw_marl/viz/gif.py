@@ -171,20 +171,7 @@ def render_gif(
         cell_px = max(1, round(600 / max(layout.width, layout.height)))
     c = _check_int("cell_px", cell_px, 1)
     _check_schedule(layout, schedule)
-    horizon = schedule.horizon
-    start = _check_int("start", start, 0)
-    if start > horizon:
-        raise ConfigError(f"start must lie in [0, {horizon}] (the schedule horizon), got {start}")
-    stop = horizon if stop is None else _check_int("stop", stop, 0)
-    if not start <= stop <= horizon:
-        raise ConfigError(f"stop must lie in [start={start}, horizon={horizon}], got {stop}")
-    times = range(start, stop + 1, every)
-    if len(times) > max_frames:
-        raise ConfigError(
-            f"the GIF would have {len(times)} frames, more than max_frames={max_frames}; "
-            f"pass a larger every= (e.g. every={-(-len(times) // max_frames) * every}) "
-            "or a smaller stop="
-        )
+    times = _frame_times(schedule.horizon, start, stop, every, max_frames)
     background = _background(layout, c, layout.width * c)
     frames = _frames(schedule, background, c, times, title)
 
@@ -201,6 +188,24 @@ def render_gif(
         )
 
     return atomic_write(path, write)
+
+
+def _frame_times(horizon: int, start: int, stop: int | None, every: int, max_frames: int) -> range:
+    """The time steps drawn; an out-of-range window or too many frames is an error."""
+    start = _check_int("start", start, 0)
+    if start > horizon:
+        raise ConfigError(f"start must lie in [0, {horizon}] (the schedule horizon), got {start}")
+    stop = horizon if stop is None else _check_int("stop", stop, 0)
+    if not start <= stop <= horizon:
+        raise ConfigError(f"stop must lie in [start={start}, horizon={horizon}], got {stop}")
+    times = range(start, stop + 1, every)
+    if len(times) > max_frames:
+        raise ConfigError(
+            f"the GIF would have {len(times)} frames, more than max_frames={max_frames}; "
+            f"pass a larger every= (e.g. every={-(-len(times) // max_frames) * every}) "
+            "or a smaller stop="
+        )
+    return times
 
 
 def _frames(

@@ -176,3 +176,24 @@ def test_every_parameter_reaches_the_simulator_from_rtaw_train(cli, built_specs,
     # The evaluation envs, the MPDM reference and the collector's envs.
     assert len(built_specs) >= 3
     _assert_params_reached(built_specs)
+
+
+def test_user_config_folder_adds_options(cli, tmp_path: Path) -> None:
+    """``hydra.searchpath`` adds a user's options, typed by the same schemas."""
+    conf = tmp_path / "my_conf" / "layout"
+    conf.mkdir(parents=True)
+    (conf / "tiny.yaml").write_text(
+        "defaults:\n  - /schema/layout/open@_here_\n  - _self_\n\nwidth: 7\nheight: 5\n"
+    )
+    result = cli(
+        "eval", f"hydra.searchpath=[file://{conf.parent}]", "layout=tiny", "tasks=random",
+        "env.num_robots=2", "env.num_tasks=6", "policy=[mpdm]", "seeds=[0]", "progress=false",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    assert "open_7x5" in result.out
+    (conf / "typo.yaml").write_text(
+        "defaults:\n  - /schema/layout/open@_here_\n  - _self_\n\nwidht: 7\n"
+    )
+    result = cli("eval", f"hydra.searchpath=[file://{conf.parent}]", "layout=typo")
+    assert result.code == 2
+    assert "widht" in result.err
