@@ -63,6 +63,14 @@ class BaselinePolicy(ABC):
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         """The slot to assign, from a ``rtaw_warehouse_v0`` observation of the free robot."""
 
+    def _nearest(self, d: np.ndarray, mask: np.ndarray) -> int:
+        """Index of the smallest ``d`` among ``mask``; ties broken at random."""
+        best = d[mask].min()
+        candidates = np.flatnonzero(mask & (d <= best + _TIE_RTOL * max(1.0, float(best))))
+        if candidates.size == 1:
+            return int(candidates[0])
+        return int(self.rng.choice(candidates))
+
     def _pick(self, scores: np.ndarray, mask: np.ndarray) -> int:
         """Index of the largest score among ``mask``; ties broken at random."""
         best = scores[mask].max()
@@ -85,13 +93,6 @@ class MPDM(BaselinePolicy):
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         d = np.asarray(observation["tasks"][:, 4], dtype=np.float64) * self.scale
         return self._nearest(d, np.asarray(observation["action_mask"], dtype=bool))
-
-    def _nearest(self, d: np.ndarray, mask: np.ndarray) -> int:
-        best = d[mask].min()
-        candidates = np.flatnonzero(mask & (d <= best + _TIE_RTOL * max(1.0, float(best))))
-        if candidates.size == 1:
-            return int(candidates[0])
-        return int(self.rng.choice(candidates))
 
 
 class RBTS(BaselinePolicy):

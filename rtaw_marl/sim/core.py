@@ -33,7 +33,8 @@ done. :meth:`WarehouseSim.schedule` returns the executed episode.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -49,7 +50,31 @@ if TYPE_CHECKING:
     # Type-only: the schedule type lives with the planners that produce it.
     from rtaw_marl.sim.mapf.schedule import Schedule
 
-__all__ = ["WarehouseSim"]
+__all__ = ["SimState", "WarehouseSim"]
+
+#: What an episode changes, in a :class:`SimState`: arrays, then scalars.
+_STATE_ARRAYS = (
+    "tasks", "task_length", "robot_start_xy", "robot_busy", "task_arrival", "task_assigned",
+    "task_ttd", "task_finished", "task_robot", "queue_ids", "robot_xy", "robot_free_at",
+    "queue_mask", "queue_rows", "queue_length",
+)  # fmt: skip
+_STATE_SCALARS = ("robot", "time", "decisions", "done", "truncated", "last_ttd", "_next_task")
+
+
+@dataclass(frozen=True)
+class SimState:
+    """A snapshot of an episode (:meth:`WarehouseSim.state`).
+
+    Attributes:
+        arrays: Copies of the episode's arrays by attribute name.
+        scalars: The selected robot, the time, counters and flags.
+        noise: ``float64 [num_tasks]`` completion noise per decision with instant travel,
+            ``None`` with a collision-aware executor.
+    """
+
+    arrays: dict[str, np.ndarray]
+    scalars: dict[str, Any]
+    noise: np.ndarray | None
 
 
 class WarehouseSim:
@@ -332,6 +357,43 @@ class WarehouseSim:
             InvalidActionError: The episode is not over.
         """
         return self._executor.schedule()
+
+    # ------------------------------------------------------------------ state
+    def state(self) -> SimState:
+        """A copy of everything the current episode has changed (for rollouts).
+
+        Future tasks and, with instant travel, the future completion noise are included:
+        a simulator that loads this state plays the same future as this one.
+        """
+        arrays = {k: np.array(getattr(self, k), copy=True) for k in _STATE_ARRAYS}
+        scalars = {k: getattr(self, k) for k in _STATE_SCALARS}
+        return SimState(arrays, scalars, self._executor.travel_noise())
+
+    def load_state(self, state: SimState) -> None:
+        """Continue from ``state`` (taken from a simulator of the same config and layout).
+
+        Only instant travel can be restored; a collision-aware episode's state loads
+        as instant travel without noise (its fleet's paths and waits are not modelled).
+
+        Raises:
+            ConfigError: This simulator's executor is collision-aware.
+        """
+        for key, value in state.arrays.items():
+            current = getattr(self, key, None)
+            if current is not None and current.shape == value.shape:
+                np.copyto(current, value)  # buffers may be views shared with a batch
+            else:
+                setattr(self, key, value.copy())
+        for key, value in state.scalars.items():
+            setattr(self, key, value)
+        noise = state.noise
+        if noise is None:
+            noise = np.zeros(self.config.num_tasks)
+        self._executor.load_travel(noise, self.decisions, self.robot_free_at)
+        for slot in np.flatnonzero(self.queue_mask):
+            ox, oy = self.queue_rows[slot, :2].tolist()
+            self._slots.set(int(slot), ox, oy)
+        self._dist = None
 
     # ------------------------------------------------------------------ results
     def metrics(self) -> EpisodeMetrics:

@@ -164,6 +164,19 @@ class Executor(ABC):
         """Counters of the episode (none by default)."""
         return {}
 
+    def travel_noise(self) -> np.ndarray | None:
+        """The completion noise per decision, for rollouts; ``None`` when travel is not
+        modelled by noise (collision-aware executors)."""
+        return None
+
+    def load_travel(self, noise: np.ndarray, decisions: int, free_at: np.ndarray) -> None:
+        """Continue an episode from a snapshot (:meth:`WarehouseSim.load_state`).
+
+        Raises:
+            ConfigError: This executor cannot be restored (it is collision-aware).
+        """
+        raise ConfigError(f"a {self.name!r} executor cannot load a simulator state")
+
 
 class InstantTravel(Executor):
     """Independent robots timed by navigator distances plus completion noise."""
@@ -207,6 +220,14 @@ class InstantTravel(Executor):
         self._decisions += 1
         self._free_at[robot] = finish
         return distance, finish
+
+    def travel_noise(self) -> np.ndarray:
+        return self._noise.copy()
+
+    def load_travel(self, noise: np.ndarray, decisions: int, free_at: np.ndarray) -> None:
+        self._noise = noise
+        self._decisions = decisions
+        self._free_at = free_at
 
     def next_robot(self, now: float) -> tuple[int, float]:
         del now

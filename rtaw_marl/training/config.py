@@ -68,11 +68,12 @@ class TrainEvalConfig:
 
     Attributes:
         every_frames: Evaluate against MPDM every this many frames.
-        seeds: Selection seeds, kept apart from the evaluation seeds 0-19.
+        seeds: Selection seeds (1000-1009), played in lockstep; kept apart from the
+            evaluation seeds 0-19, which are never used for training or selection.
     """
 
     every_frames: int = 20480
-    seeds: list[int] = field(default_factory=lambda: [1000, 1001, 1002, 1003, 1004])
+    seeds: list[int] = field(default_factory=lambda: list(range(1000, 1010)))
 
 
 @dataclass(kw_only=True)
