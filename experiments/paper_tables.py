@@ -1,30 +1,44 @@
-"""Regenerate the results tables of docs/results.md.
+"""Regenerate the results tables of docs/results.md, with paired 95% intervals.
 
 Usage::
 
-    python experiments/paper_tables.py table1    # Table I: 500 tasks, M = 10/100, Direct, A-E
-    python experiments/paper_tables.py table2    # Table II: 5,000 tasks, M = 500/1000
-    python experiments/paper_tables.py transfer  # cross-layout transfer of pretrained policies
-    python experiments/paper_tables.py navigators  # SIPP and CBS (the paper's transfer table)
-    python experiments/paper_tables.py navigators --seeds 20  # the same on seeds 0-19
+    python experiments/paper_tables.py table1      # Table I, paper and drain modes
+    python experiments/paper_tables.py table2      # Table II: 5,000 tasks, M = 500/1000
+    python experiments/paper_tables.py transfer    # cross-layout transfer of the zoo
+    python experiments/paper_tables.py navigators  # SIPP and CBS execution
+    python experiments/paper_tables.py table1 --seeds 5 --workers 2   # quicker, 2 processes
 
-Each command evaluates on seeds 0-4 (the pretrained policies were trained and selected on
-other seeds), prints a markdown table, and replaces its section of docs/results.md
-(between ``<!-- BEGIN name -->`` and ``<!-- END name -->``) together with a PNG in
-docs/img/.
+Every table is evaluated on the evaluation seeds 0-19 (``--seeds N``: 0..N-1); the
+pretrained policies were trained and selected on other seeds. Each row evaluates MPDM,
+RBTS, ``lookahead`` (H = 3), ``hungarian``, the ``hindsight`` reference (knows the
+future; ``--no-hindsight`` leaves it out) and the shipped RTAW policy, and reports:
+
+* mean TTD per policy;
+* RTAW against MPDM and against the strongest rule of that row (the rule with the lowest
+  mean TTD among RBTS, lookahead and hungarian): the paired difference in % of that
+  policy's mean, its 95% Student t-interval over seeds, ``*`` where it excludes 0;
+* the share of the hindsight gain over MPDM that lookahead and RTAW capture.
+
+Pooled rows average the per-seed differences of every row (each in % of its row's
+baseline mean) with a t-interval over all row-seed pairs. The script replaces its
+section of docs/results.md (between ``<!-- BEGIN name -->`` and ``<!-- END name -->``)
+and writes the per-seed TTDs to docs/data/<name>.json.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from rtaw_marl.evaluation import evaluate
-from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
+from rtaw_marl.evaluation.stats import hindsight_share, paired_difference
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.policies.pretrained.registry import pretrained_path
@@ -32,8 +46,8 @@ from rtaw_marl.sim.builder import SimSpec
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results.md"
-IMG = ROOT / "docs" / "img"
-SEEDS = [0, 1, 2, 3, 4]
+DATA = ROOT / "docs" / "data"
+RULES = ("RBTS", "lookahead", "hungarian")
 
 #: Table I rows: label, layout spec, navigator, pretrained policy per robot count.
 ROWS = [
@@ -46,186 +60,201 @@ ROWS = [
     ],
 ]  # fmt: skip
 
-#: The paper's Table I (MPDM, RBTS, RTAW means), by row label prefix and M.
-PAPER_TABLE1 = {
-    ("Direct", 10): (8312, 8376, 7924), ("Direct", 100): (13089, 13322, 12298),
-    ("A* layout A", 10): (5662, 6194, 5165), ("A* layout A", 100): (7429, 7882, 7032),
-    ("A* layout B", 10): (5591, 6098, 4989), ("A* layout B", 100): (7885, 8288, 7387),
-    ("A* layout C", 10): (6205, 6503, 5861), ("A* layout C", 100): (7210, 7915, 6954),
-    ("A* layout D", 10): (5920, 6675, 5719), ("A* layout D", 100): (7764, 8182, 7101),
-    ("A* layout E", 10): (5536, 5916, 5281), ("A* layout E", 100): (7791, 8126, 7453),
-}  # fmt: skip
 
-
-def _policies(sim, pretrained: str) -> dict:
+# --------------------------------------------------------------------------- evaluation
+def evaluate_setting(job: dict[str, Any]) -> dict[str, Any]:
+    """Evaluate every policy on one setting; returns per-seed TTDs and seconds/episode."""
+    sim = SimSpec.of(job["env"], job["layout"], job["navigator"], job["tasks"]).build()
+    names = {"MPDM": "mpdm", "RBTS": "rbts", "lookahead": "lookahead", "hungarian": "hungarian"}
+    if job.get("hindsight", True):
+        names["hindsight"] = "hindsight"
+    policies: dict[str, Any] = {
+        label: make_baseline(name, sim.navigator, sim.layout.scale)
+        for label, name in names.items()
+        if label in job.get("only", names)
+    }
+    if job.get("pretrained"):
+        policies["RTAW"] = load_policy(pretrained_path(job["pretrained"]), name="RTAW")
+    res = evaluate(sim, policies, job["seeds"])
     return {
-        "MPDM": make_baseline("mpdm", sim.navigator, sim.layout.scale),
-        "RBTS": make_baseline("rbts", sim.navigator, sim.layout.scale),
-        "RTAW": load_policy(pretrained_path(pretrained), name="RTAW"),
+        "key": job["key"],
+        "ttd": {k: v["ttd"] for k, v in res.items()},
+        "seconds": {k: float(np.mean(v["wall_time_s"])) for k, v in res.items()},
     }
 
 
-def _ms(values) -> str:
-    arr = np.asarray(values, dtype=float)
-    return f"{arr.mean():.0f} ± {arr.std():.0f}"
+def run_all(jobs: list[dict[str, Any]], workers: int) -> dict[Any, dict[str, Any]]:
+    """Every job, on ``workers`` processes, keyed by ``job["key"]``; prints progress."""
+    out = {}
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for result in pool.map(evaluate_setting, jobs):
+            out[result["key"]] = result
+            print(f"done {result['key']}", file=sys.stderr, flush=True)
+    return out
 
 
-def _imp(base, other) -> str:
-    """Mean ± std over seeds of the per-seed percent improvement of ``other`` over ``base``."""
-    imp = 100 * (np.asarray(base) - np.asarray(other)) / np.asarray(base)
-    return f"{imp.mean():+.1f} ± {imp.std():.1f}"
+# --------------------------------------------------------------------------- cells
+def vs(base: list[float], other: list[float]) -> str:
+    """``+3.1% [+1.2, +5.0]*``: ``other``'s TTD below ``base``'s, paired over seeds."""
+    d = paired_difference(base, other)
+    if d.pct_low is None:
+        return f"{d.pct:+.1f}%"
+    mark = "*" if d.significant else ""
+    return f"{d.pct:+.1f}% [{d.pct_low:+.1f}, {d.pct_high:+.1f}]{mark}"
 
 
-def table1(mode: str) -> tuple[str, dict]:
-    """Table I in ``paper`` or ``drain`` episode mode."""
-    header = "| row | M | MPDM | RBTS | RTAW | RTAW vs MPDM (%) | RTAW vs RBTS (%) |"
-    header += " paper MPDM / RBTS / RTAW |" if mode == "paper" else " lower bound | RTAW gap (%) |"
-    lines = [header, "|" + "---|" * (header.count("|") - 1)]
-    data = {}
+def share(ttd: dict[str, list[float]], name: str) -> str:
+    if "hindsight" not in ttd:
+        return "-"
+    s = hindsight_share(ttd["MPDM"], ttd[name], ttd["hindsight"])
+    return "-" if s is None else f"{100 * s.share:.0f}%"
+
+
+def strongest_rule(ttd: dict[str, list[float]]) -> str:
+    return min(RULES, key=lambda r: float(np.mean(ttd[r])))
+
+
+def pooled(pairs: list[tuple[list[float], list[float]]]) -> str:
+    """Per-seed differences of every row, each in % of its row's baseline mean."""
+    diffs = np.concatenate([100 * (np.asarray(b) - np.asarray(o)) / np.mean(b) for b, o in pairs])
+    zeros = np.zeros_like(diffs)
+    d = paired_difference(diffs, zeros)  # the interval of the mean of the differences
+    mark = "*" if d.significant else ""
+    return f"{d.mean:+.1f}% [{d.low:+.1f}, {d.high:+.1f}]{mark} (n={d.n})"
+
+
+def policy_table(
+    results: dict[Any, dict[str, Any]], labels: list[tuple[Any, str]], extra: str = ""
+) -> tuple[str, list[str]]:
+    """Rows of mean TTDs and comparisons; returns the table and the pooled lines."""
+    order = [p for p in ("MPDM", *RULES, "hindsight", "RTAW")]
+    head = ["setting", *order, "RTAW vs MPDM", "RTAW vs strongest rule", "hindsight share:"
+            " lookahead / RTAW"]  # fmt: skip
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    to_mpdm, to_best, look_mpdm, look_best = [], [], [], []
+    for key, label in labels:
+        ttd = results[key]["ttd"]
+        best = strongest_rule(ttd)
+        cells = [label, *(f"{np.mean(ttd[p]):.0f}" if p in ttd else "-" for p in order)]
+        cells += [vs(ttd["MPDM"], ttd["RTAW"]), f"{best}: {vs(ttd[best], ttd['RTAW'])}"]
+        cells.append(f"{share(ttd, 'lookahead')} / {share(ttd, 'RTAW')}")
+        lines.append("| " + " | ".join(cells) + " |")
+        to_mpdm.append((ttd["MPDM"], ttd["RTAW"]))
+        to_best.append((ttd[best], ttd["RTAW"]))
+        look_mpdm.append((ttd["MPDM"], ttd["lookahead"]))
+        if best != "lookahead":
+            look_best.append((ttd[best], ttd["lookahead"]))
+    summary = [
+        f"- RTAW vs MPDM, pooled: {pooled(to_mpdm)}",
+        f"- RTAW vs the strongest rule of each row, pooled: {pooled(to_best)}",
+        f"- lookahead vs MPDM, pooled: {pooled(look_mpdm)}",
+    ]
+    return "\n".join(lines) + extra, summary
+
+
+# --------------------------------------------------------------------------- tables
+def table1(mode: str, seeds: list[int], workers: int, hindsight: bool) -> str:
+    jobs, labels = [], []
     for label, layout, nav, pretrained in ROWS:
         for m in (10, 100):
             env = {"num_robots": m, "num_tasks": 500, "queue_len": 10, "episode_mode": mode}
-            sim = SimSpec.of(env, layout, nav, "designated").build()
-            res = evaluate(sim, _policies(sim, pretrained[m]), SEEDS)
-            ttd = {k: v["ttd"] for k, v in res.items()}
-            data[(label, m)] = ttd
-            row = [label, str(m), _ms(ttd["MPDM"]), _ms(ttd["RBTS"]), _ms(ttd["RTAW"]),
-                   _imp(ttd["MPDM"], ttd["RTAW"]), _imp(ttd["RBTS"], ttd["RTAW"])]  # fmt: skip
-            if mode == "paper":
-                paper = PAPER_TABLE1[(label.split(" (")[0], m)]
-                row.append(" / ".join(str(v) for v in paper))
-            else:
-                bound = [ttd_lower_bound(sim, s) for s in SEEDS]
-                gap = 100 * (np.asarray(ttd["RTAW"]) - bound) / np.asarray(bound)
-                row += [_ms(bound), f"{gap.mean():.0f}"]
-            lines.append("| " + " | ".join(row) + " |")
-            print(lines[-1], flush=True)
-    return "\n".join(lines), data
+            key = f"{label}, M={m}"
+            jobs.append({"key": key, "env": env, "layout": layout, "navigator": nav,
+                         "tasks": "designated", "pretrained": pretrained[m], "seeds": seeds,
+                         "hindsight": hindsight})  # fmt: skip
+            labels.append((key, key))
+    results = run_all(jobs, workers)
+    save(f"table1_{mode}", results, seeds)
+    table, summary = policy_table(results, labels)
+    return table + "\n\n" + "\n".join(summary)
 
 
-def table2() -> str:
-    """Scalability: 5,000 random tasks, M = 500 and 1000; wall time per episode per policy."""
-    rows = [
+def table2(seeds: list[int], workers: int, hindsight: bool) -> str:
+    settings = [
         ("Direct, open 300x300", {"name": "open", "width": 300, "height": 300}, "direct",
          "open300_direct_m100_random"),
         ("A*, layout C 256x256", {"name": "preset", "preset": "C", "width": 256, "height": 256},
          "astar", "C256_astar_m100_random"),
     ]  # fmt: skip
-    header = (
-        "| M | setting | MPDM | RBTS | RTAW | RTAW vs MPDM (%) | RTAW vs RBTS (%) | "
-        "s/episode MPDM / RBTS / RTAW |"
-    )
-    lines = [header, "|" + "---|" * (header.count("|") - 1)]
+    jobs, labels = [], []
     for m in (500, 1000):
-        for label, layout, nav, pretrained in rows:
+        for label, layout, nav, pretrained in settings:
             env = {"num_robots": m, "num_tasks": 5000, "queue_len": 10, "episode_mode": "paper"}
-            # Random tasks spread over the whole grid: the designated centres of the
-            # 60x60 setting would leave most of a 256x256 or 300x300 grid unused.
-            sim = SimSpec.of(env, layout, nav, "random").build()
-            res = evaluate(sim, _policies(sim, pretrained), SEEDS)
-            ttd = {k: v["ttd"] for k, v in res.items()}
-            wall = " / ".join(f"{np.mean(res[k]['wall_time_s']):.1f}" for k in res)
-            lines.append(
-                f"| {m} | {label} | {_ms(ttd['MPDM'])} | {_ms(ttd['RBTS'])} | {_ms(ttd['RTAW'])} "
-                f"| {_imp(ttd['MPDM'], ttd['RTAW'])} | {_imp(ttd['RBTS'], ttd['RTAW'])} | {wall} |"
-            )
-            print(lines[-1], flush=True)
-    return "\n".join(lines)
+            key = f"M={m}, {label}"
+            # Random tasks over the whole grid: the designated centres of the 60x60
+            # setting would leave most of a 256x256 or 300x300 grid unused.
+            jobs.append({"key": key, "env": env, "layout": layout, "navigator": nav,
+                         "tasks": "random", "pretrained": pretrained, "seeds": seeds,
+                         "hindsight": hindsight})  # fmt: skip
+            labels.append((key, key))
+    results = run_all(jobs, workers)
+    save("table2", results, seeds)
+    table, summary = policy_table(results, labels)
+    wall = ["", "Seconds per episode (mean over seeds):", ""]
+    for key, _ in labels:
+        secs = results[key]["seconds"]
+        wall.append(f"- {key}: " + ", ".join(f"{k} {v:.1f}" for k, v in secs.items()))
+    return table + "\n\n" + "\n".join(summary) + "\n" + "\n".join(wall)
 
 
-def transfer() -> str:
-    """Each layout's pretrained policy evaluated on every layout (M = 10, A*, drain)."""
+def transfer(seeds: list[int], workers: int) -> str:
+    """Each layout's pretrained policy on every layout (M = 10, A*, drain), vs MPDM."""
     presets = "ABCDE"
+    jobs = []
+    for p in presets:
+        layout = {"name": "preset", "preset": p, "width": 60, "height": 60}
+        env = {"num_robots": 10, "num_tasks": 500}
+        jobs.append({"key": ("MPDM", p), "env": env, "layout": layout, "navigator": "astar",
+                     "tasks": "designated", "seeds": seeds, "only": ("MPDM",)})  # fmt: skip
+        for trained in presets:
+            jobs.append({"key": (trained, p), "env": env, "layout": layout,
+                         "navigator": "astar", "tasks": "designated", "seeds": seeds,
+                         "only": (), "pretrained": f"{trained}_astar_m10"})  # fmt: skip
+    results = run_all(jobs, workers)
     header = "| trained on \\ evaluated on | " + " | ".join(presets) + " |"
     lines = [header, "|" + "---|" * (len(presets) + 1)]
-    mpdm = {}
-    for p in presets:
-        sim = SimSpec.of({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": p},
-                        "astar", "designated").build()  # fmt: skip
-        mpdm[p] = evaluate(sim, {"m": make_baseline("mpdm")}, SEEDS)["m"]["ttd"]
     for trained in presets:
-        cells = []
-        for p in presets:
-            sim = SimSpec.of({"num_robots": 10, "num_tasks": 500}, {"name": "preset", "preset": p},
-                            "astar", "designated").build()  # fmt: skip
-            policy = load_policy(pretrained_path(f"{trained}_astar_m10"))
-            ttd = evaluate(sim, {"r": policy}, SEEDS)["r"]["ttd"]
-            cells.append(_imp(mpdm[p], ttd))
+        cells = [
+            vs(results[("MPDM", p)]["ttd"]["MPDM"], results[(trained, p)]["ttd"]["RTAW"])
+            for p in presets
+        ]
         lines.append(f"| {trained} | " + " | ".join(cells) + " |")
-        print(lines[-1], flush=True)
     return "\n".join(lines)
 
 
-#: The paper's SIPP/CBS table (MPDM, RBTS, RTAW means; 10 robots, 50 tasks).
-PAPER_NAVIGATORS = {
-    ("sipp", "A"): (692, 725, 645), ("sipp", "B"): (616, 636, 566), ("sipp", "C"): (684, 707, 626),
-    ("sipp", "D"): (710, 706, 642), ("sipp", "E"): (643, 689, 595),
-    ("cbs", "A"): (644, 696, 615), ("cbs", "B"): (680, 675, 619), ("cbs", "C"): (655, 670, 625),
-    ("cbs", "D"): (766, 817, 738), ("cbs", "E"): (618, 671, 591),
-}  # fmt: skip
-
-
-def navigators(seeds: list[int]) -> str:
-    """10 robots, 50 designated tasks on layouts A-E, executed by SIPP and CBS (and A*).
-
-    RTAW is each layout's A*-trained policy; no completion noise (the collision-aware
-    navigators time tasks in whole seconds), drain mode: all 50 tasks are delivered.
-    The last rows pool every layout's per-seed improvements (mean ± standard error).
-    """
-    header = (
-        "| layout | navigator | MPDM | RBTS | RTAW | RTAW vs MPDM (%) | RTAW vs RBTS (%) | "
-        "paper MPDM / RBTS / RTAW |"
-    )
-    lines = [header, "|" + "---|" * (header.count("|") - 1)]
+def navigators(seeds: list[int], workers: int, hindsight: bool) -> str:
+    """10 robots, 50 designated tasks on layouts A-E, with A*, SIPP and CBS execution."""
     env = {"num_robots": 10, "num_tasks": 50, "queue_len": 10, "noise_mean": 0.0, "noise_var": 0.0}
-    pooled: dict[str, dict[str, list[float]]] = {}
-    for p in "ABCDE":
-        for nav in ("astar", "sipp", "cbs"):
+    jobs, labels = [], []
+    for nav in ("astar", "sipp", "cbs"):
+        for p in "ABCDE":
             layout = {"name": "preset", "preset": p, "width": 60, "height": 60}
-            sim = SimSpec.of(env, layout, nav, "designated").build()
-            res = evaluate(sim, _policies(sim, f"{p}_astar_m10"), seeds)
-            ttd = {k: np.asarray(v["ttd"]) for k, v in res.items()}
-            for base in ("MPDM", "RBTS"):
-                imp = 100 * (ttd[base] - ttd["RTAW"]) / ttd[base]
-                pooled.setdefault(nav, {}).setdefault(base, []).extend(imp.tolist())
-            paper = PAPER_NAVIGATORS.get((nav, p))
-            lines.append(
-                f"| {p} | {nav} | {_ms(ttd['MPDM'])} | {_ms(ttd['RBTS'])} | {_ms(ttd['RTAW'])} "
-                f"| {_imp(ttd['MPDM'], ttd['RTAW'])} | {_imp(ttd['RBTS'], ttd['RTAW'])} "
-                f"| {' / '.join(map(str, paper)) if paper else '-'} |"
-            )
-            print(lines[-1], flush=True)
-    for nav, imps in pooled.items():
-        cells = []
-        for base in ("MPDM", "RBTS"):
-            arr = np.asarray(imps[base])
-            cells.append(f"{arr.mean():+.1f} ± {arr.std(ddof=1) / np.sqrt(len(arr)):.1f} (SE)")
-        lines.append(f"| all | {nav} | | | | {cells[0]} | {cells[1]} | |")
-    return "\n".join(lines)
+            key = f"{p}, {nav}"
+            jobs.append({"key": key, "env": env, "layout": layout, "navigator": nav,
+                         "tasks": "designated", "pretrained": f"{p}_astar_m10",
+                         "seeds": seeds, "hindsight": hindsight})  # fmt: skip
+            labels.append((key, key))
+    results = run_all(jobs, workers)
+    save("navigators", results, seeds)
+    table, _ = policy_table(results, labels)
+    summary = []
+    for nav in ("astar", "sipp", "cbs"):
+        rows = [results[f"{p}, {nav}"]["ttd"] for p in "ABCDE"]
+        rtaw_mpdm = pooled([(t["MPDM"], t["RTAW"]) for t in rows])
+        rtaw_rbts = pooled([(t["RBTS"], t["RTAW"]) for t in rows])
+        look_mpdm = pooled([(t["MPDM"], t["lookahead"]) for t in rows])
+        summary.append(
+            f"- {nav}, pooled over A-E: RTAW vs MPDM {rtaw_mpdm}; vs RBTS {rtaw_rbts}; "
+            f"lookahead vs MPDM {look_mpdm}"
+        )
+    return table + "\n\n" + "\n".join(summary)
 
 
-def plot_table1(data: dict, path: Path) -> None:
-    """Bar chart: mean TTD per policy per row with std error bars."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    keys = list(data)
-    x = np.arange(len(keys))
-    fig, ax = plt.subplots(figsize=(11, 4), dpi=110)
-    for i, name in enumerate(("MPDM", "RBTS", "RTAW")):
-        means = [np.mean(data[k][name]) for k in keys]
-        stds = [np.std(data[k][name]) for k in keys]
-        ax.bar(x + (i - 1) * 0.27, means, 0.27, yerr=stds, capsize=2, label=name)
-    labels = [k[0].replace("A* layout ", "").split(" (")[0] for k in keys]
-    ax.set_xticks(x, [f"{lab}\nM={k[1]}" for lab, k in zip(labels, keys, strict=True)], fontsize=8)
-    ax.set_ylabel("TTD (s), 500 tasks, seeds 0-4")
-    ax.legend()
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
+# --------------------------------------------------------------------------- files
+def save(name: str, results: dict[Any, dict[str, Any]], seeds: list[int]) -> None:
+    DATA.mkdir(parents=True, exist_ok=True)
+    payload = {"seeds": seeds, "rows": {str(k): v["ttd"] for k, v in results.items()}}
+    (DATA / f"{name}.json").write_text(json.dumps(payload, indent=1) + "\n")
 
 
 def replace_section(name: str, body: str) -> None:
@@ -243,24 +272,29 @@ def replace_section(name: str, body: str) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("table", choices=["table1", "table2", "transfer", "navigators"])
-    parser.add_argument(
-        "--seeds", type=int, default=len(SEEDS), help="navigators: evaluate on seeds 0..N-1"
-    )
+    parser.add_argument("--seeds", type=int, default=20, help="evaluate on seeds 0..N-1")
+    parser.add_argument("--workers", type=int, default=1, help="evaluation processes")
+    parser.add_argument("--no-hindsight", action="store_true", help="leave the reference out")
     args = parser.parse_args()
+    seeds = list(range(args.seeds))
+    hindsight = not args.no_hindsight
     if args.table == "table1":
-        paper, data = table1("paper")
-        replace_section("table1_paper", paper)
-        plot_table1(data, IMG / "table1_ttd.png")
-        drain, _ = table1("drain")
-        replace_section("table1_drain", drain)
+        for mode in ("paper", "drain"):
+            body = table1(mode, seeds, args.workers, hindsight)
+            print(body, flush=True)
+            replace_section(f"table1_{mode}", body)
     elif args.table == "table2":
-        replace_section("table2", table2())
+        body = table2(seeds, args.workers, hindsight)
+        print(body)
+        replace_section("table2", body)
     elif args.table == "navigators":
-        seeds = list(range(args.seeds))
-        name = "navigators" if seeds == SEEDS else f"navigators_{len(seeds)}"
-        replace_section(name, navigators(seeds))
+        body = navigators(seeds, args.workers, hindsight)
+        print(body)
+        replace_section("navigators", body)
     else:
-        replace_section("transfer", transfer())
+        body = transfer(seeds, args.workers)
+        print(body)
+        replace_section("transfer", body)
     return 0
 
 

@@ -19,16 +19,19 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.sim.builder import SimSpec
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from paper_tables import SEEDS, _imp, _ms, replace_section
+from paper_tables import replace_section, vs
 
 ROOT = Path(__file__).resolve().parents[1]
 REWARDS = ("ttd", "length", "ttd_length")
+SEEDS = list(range(20))  # the evaluation seeds
 COMMON = ["layout=A", "navigator=astar", "env.num_robots=10", "algo=ppo_fast",
           "frames=102400", "eval.every_frames=10240", "seed=0", "progress=false"]  # fmt: skip
 
@@ -53,11 +56,11 @@ def table(runs: dict[str, Path]) -> str:
     )
     res = evaluate(sim, policies, SEEDS)
     mpdm = res["MPDM"]["ttd"]
-    lines = ["| policy | TTD | makespan | TTD vs MPDM (%) |", "|---|---|---|---|"]
+    lines = ["| policy | TTD | makespan | TTD vs MPDM (paired, 95% CI) |", "|---|---|---|---|"]
     for name, metrics in res.items():
         lines.append(
-            f"| {name} | {_ms(metrics['ttd'])} | {_ms(metrics['makespan'])} "
-            f"| {_imp(mpdm, metrics['ttd'])} |"
+            f"| {name} | {np.mean(metrics['ttd']):.0f} | {np.mean(metrics['makespan']):.0f} "
+            f"| {vs(mpdm, metrics['ttd']) if name != 'MPDM' else '-'} |"
         )
         print(lines[-1], flush=True)
     return "\n".join(lines)

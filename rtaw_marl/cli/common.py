@@ -91,7 +91,9 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
     policies: dict[str, SimPolicy] = {}
     for name in names:
         if name not in sources:
-            policies[name] = make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale)
+            policies[name] = make_baseline(
+                name, navigator=sim.navigator, scale=sim.layout.scale, params=cfg.baselines
+            )
             continue
         import torch
 

@@ -6,9 +6,12 @@ Examples::
     rtaw-eval env.num_robots=100 env.num_tasks=500 navigator=astar layout=open seeds=[0,1,2]
     rtaw-eval --multirun env.num_robots=10,100 navigator=direct,astar
     rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=[runs/a/best.pt,runs/b/best.pt]
+    rtaw-eval policy=[mpdm,rbts,hindsight] compare_to=rbts lower_bound=true
 """
 
 from __future__ import annotations
+
+import time
 
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
@@ -24,11 +27,14 @@ from rtaw_marl.cli.common import (
 )
 from rtaw_marl.config import as_plain
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
+from rtaw_marl.evaluation import comparisons, evaluate, format_table, write_json_atomic
 from rtaw_marl.evaluation.config import EvalConfig
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
 from rtaw_marl.sim.builder import build_sim
+
+#: The main baseline every policy is compared with (when it is evaluated).
+REFERENCE = "mpdm"
 
 
 @exit_on_user_error
@@ -44,19 +50,37 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
     sim = build_sim(sim_spec(cfg))
     print(f"layout {sim.layout.describe()}")
     policies = policies_from_cfg(cfg, names, sim)
+    # Checked before the episodes run, so a typo does not cost a whole evaluation.
+    if cfg.compare_to is not None and cfg.compare_to not in policies:
+        raise ConfigError(
+            f"compare_to={cfg.compare_to} is not an evaluated policy; "
+            f"evaluated: {', '.join(policies)}"
+        )
     total = len(policies) * len(seeds) * sim.config.num_tasks
     with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:
         results = evaluate(sim, policies, seeds, on_decisions=bar.update)
 
-    bound = None
-    if cfg.lower_bound and sim.config.episode_mode == "drain":
+    bound, bound_time = None, None
+    if cfg.lower_bound and sim.config.episode_mode != "drain":
+        print("lower bound: skipped (drain mode only)")
+    elif cfg.lower_bound:
+        start = time.perf_counter()
         bound = [ttd_lower_bound(sim, seed) for seed in seeds]
+        bound_time = time.perf_counter() - start
+        print(f"lower bound: {bound_time:.1f} s")
         for metrics in results.values():
             metrics["gap_pct"] = gap_to_bound(metrics["ttd"], bound)
 
-    print(format_table(results, lower_bound=bound))
+    print(format_table(results, REFERENCE, lower_bound=bound, compare_to=cfg.compare_to))
     output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json"
-    payload = {"config": as_plain(cfg), "seeds": seeds, "lower_bound": bound, "policies": results}
+    payload = {
+        "config": as_plain(cfg),
+        "seeds": seeds,
+        "lower_bound": bound,
+        "lower_bound_time_s": bound_time,
+        "policies": results,
+        "comparisons": comparisons(results, REFERENCE, compare_to=cfg.compare_to),
+    }
     path = write_json_atomic(output, payload)
     print(f"results: {path}")
     return payload

@@ -70,9 +70,24 @@ def key_reference() -> str:
 
 
 def _schemas() -> list[tuple[str, type]]:
-    out = [(f"{app} (top level)", schema) for app, schema in APPS.items()]
+    out: list[tuple[str, type]] = []
+    for app, schema in APPS.items():
+        out.append((f"{app} (top level)", schema))
+        out += _sections(app, schema)
     for group, options in GROUPS.items():
         out += [(f"{group}={name}", schema) for name, schema in options.items()]
+    return out
+
+
+def _sections(prefix: str, schema: type) -> list[tuple[str, type]]:
+    """Nested dataclass fields (``collector``, ``eval``, ``baselines``) as their own tables."""
+    grouped = {cls for options in GROUPS.values() for cls in options.values()}
+    out = []
+    for f in dataclasses.fields(schema):
+        if f.default_factory is not dataclasses.MISSING:
+            value = f.default_factory()
+            if dataclasses.is_dataclass(value) and type(value) not in grouped:
+                out.append((f"{prefix}: {f.name}.*", type(value)))
     return out
 
 

@@ -43,6 +43,9 @@ def register_configs() -> None:
     global _registered
     if _registered:
         return
+    # seeds='${range:0,20}' on the command line: the 20 evaluation seeds, without typing them.
+    if not OmegaConf.has_resolver("range"):
+        OmegaConf.register_new_resolver("range", lambda a, b: list(range(int(a), int(b))))
     store = ConfigStore.instance()
     for group, options in GROUPS.items():
         for name, schema in options.items():

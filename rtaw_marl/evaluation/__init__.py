@@ -1,8 +1,34 @@
-"""Evaluation of policies on seeded episodes, tables and result files."""
+"""Evaluation of policies on seeded episodes, paired statistics, tables and result files."""
 
 from __future__ import annotations
 
 from rtaw_marl.evaluation.evaluate import evaluate, run_episode
-from rtaw_marl.evaluation.report import format_table, improvement, write_json_atomic
+from rtaw_marl.evaluation.report import (
+    comparisons,
+    format_table,
+    improvement,
+    json_safe,
+    write_json_atomic,
+)
+from rtaw_marl.evaluation.stats import (
+    HindsightShare,
+    PairedDiff,
+    hindsight_share,
+    mean_ci,
+    paired_difference,
+)
 
-__all__ = ["evaluate", "format_table", "improvement", "run_episode", "write_json_atomic"]
+__all__ = [
+    "HindsightShare",
+    "PairedDiff",
+    "comparisons",
+    "evaluate",
+    "format_table",
+    "hindsight_share",
+    "improvement",
+    "json_safe",
+    "mean_ci",
+    "paired_difference",
+    "run_episode",
+    "write_json_atomic",
+]

@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from rtaw_marl.policies.config import BaselinesConfig
+
 __all__ = ["EvalConfig", "RenderConfig"]
 
 
@@ -19,14 +21,20 @@ class EvalConfig:
         navigator: A navigator option.
         tasks: A task-stream option.
         policy: Policies to evaluate, by name (one or a list): ``mpdm``, ``rbts``,
-            ``random``, ``checkpoint`` (trained files) and ``rtaw`` (shipped policies).
+            ``random``, ``lookahead``, ``hungarian``, ``hindsight`` (a reference that
+            knows the future), ``checkpoint`` (trained files) and ``rtaw`` (shipped
+            policies).
         checkpoint: Checkpoint path(s) evaluated when ``policy`` includes ``checkpoint``.
         pretrained: Shipped policy name(s) evaluated when ``policy`` includes ``rtaw``.
         seeds: Episode seeds; every policy sees the same tasks for the same seed.
-        lower_bound: Report the assignment lower bound on TTD (drain mode only).
+        compare_to: A policy name (among ``policy``'s) every other policy is also
+            compared with, besides MPDM: a paired TTD difference with its interval.
+        lower_bound: Report the assignment lower bound on TTD and each policy's gap to
+            it (drain mode only); off by default: it is loose and costly at large sizes.
         output: Where ``results.json`` goes; ``None`` means the Hydra run folder.
         progress: Show a tqdm progress bar.
         torch_threads: torch intra-op threads for network policies.
+        baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
     """
 
     env: Any
@@ -37,10 +45,12 @@ class EvalConfig:
     checkpoint: Any = None
     pretrained: Any = None
     seeds: Any = field(default_factory=lambda: [0, 1, 2, 3, 4])
-    lower_bound: bool = True
+    compare_to: str | None = None
+    lower_bound: bool = False
     output: str | None = None
     progress: bool = True
     torch_threads: int = 1
+    baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
 
 
 @dataclass(kw_only=True)
@@ -64,6 +74,7 @@ class RenderConfig:
         max_frames: Refuse to draw more frames than this.
         cell_px: Pixels per grid cell; ``None`` picks about 600 px across.
         torch_threads: torch intra-op threads for network policies.
+        baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
     """
 
     env: Any
@@ -82,3 +93,4 @@ class RenderConfig:
     max_frames: int = 1000
     cell_px: int | None = None
     torch_threads: int = 1
+    baselines: BaselinesConfig = field(default_factory=BaselinesConfig)

@@ -1,17 +1,39 @@
-"""Results tables and atomic result files."""
+"""Results tables, paired comparisons for ``results.json``, and atomic result files."""
 
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from rtaw_marl.evaluation.stats import (
+    HindsightShare,
+    PairedDiff,
+    hindsight_share,
+    mean_ci,
+    paired_difference,
+)
 from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["format_table", "gap_to_bound", "improvement", "write_json_atomic"]
+__all__ = [
+    "HINDSIGHT",
+    "comparisons",
+    "format_table",
+    "gap_to_bound",
+    "improvement",
+    "json_safe",
+    "write_json_atomic",
+]
+
+#: Name of the policy that knows the future: the reference of the hindsight share.
+HINDSIGHT = "hindsight"
+
+Results = Mapping[str, Mapping[str, Sequence[float]]]
 
 
 def improvement(baseline: Sequence[float], other: Sequence[float]) -> float:
@@ -20,60 +42,220 @@ def improvement(baseline: Sequence[float], other: Sequence[float]) -> float:
     return 100.0 * (base - float(np.mean(other))) / base if base else 0.0
 
 
-def _mean_std(values: Sequence[float]) -> str:
-    arr = np.asarray(values, dtype=np.float64)
-    return f"{arr.mean():.2f} ± {arr.std():.2f}"
-
-
 def gap_to_bound(ttd: Sequence[float], bound: Sequence[float]) -> list[float]:
     """Per-seed percent by which each TTD exceeds the lower bound."""
     return [100.0 * (t - b) / b if b else 0.0 for t, b in zip(ttd, bound, strict=True)]
 
 
-def format_table(
-    results: Mapping[str, Mapping[str, Sequence[float]]],
+@dataclass
+class _Comparison:
+    """One policy's comparisons: paired differences by baseline, and its hindsight share."""
+
+    vs: dict[str, PairedDiff] = field(default_factory=dict)
+    share: HindsightShare | None = None
+    has_share: bool = False
+
+
+def _baselines(results: Results, reference: str, compare_to: str | None) -> list[str]:
+    """The evaluated baselines every policy is compared against, without repeats."""
+    names = [reference] if compare_to is None else [reference, compare_to]
+    return [n for i, n in enumerate(names) if n in results and n not in names[:i]]
+
+
+def _compare(
+    results: Results,
+    reference: str,
+    compare_to: str | None,
+    hindsight: str,
+    confidence: float,
+) -> dict[str, _Comparison]:
+    baselines = _baselines(results, reference, compare_to)
+    with_share = hindsight in results and reference in results
+    out: dict[str, _Comparison] = {}
+    for name, metrics in results.items():
+        entry = _Comparison(has_share=with_share)
+        for base in baselines:
+            if base != name:
+                entry.vs[base] = paired_difference(results[base]["ttd"], metrics["ttd"], confidence)
+        if with_share:
+            entry.share = hindsight_share(
+                results[reference]["ttd"], metrics["ttd"], results[hindsight]["ttd"], confidence
+            )
+        out[name] = entry
+    return out
+
+
+def comparisons(
+    results: Results,
     reference: str = "mpdm",
-    lower_bound: Sequence[float] | None = None,
-) -> str:
-    """A markdown table: mean ± std over seeds of TTD and makespan per policy.
+    compare_to: str | None = None,
+    hindsight: str = HINDSIGHT,
+    confidence: float = 0.95,
+) -> dict[str, dict[str, Any]]:
+    """Paired TTD comparisons of every policy, as plain JSON-ready dicts.
 
     Args:
         results: ``{policy: {metric: [per seed]}}`` as returned by ``evaluate``.
-        reference: Policy the improvement column is measured against; the column is
-            left out when that policy was not evaluated.
-        lower_bound: Per-seed TTD lower bounds; adds a bound row and a gap column.
+        reference: The main baseline (MPDM); skipped when it was not evaluated.
+        compare_to: A second baseline, skipped when None or not evaluated.
+        hindsight: The policy that knows the future; the share of its gain over
+            ``reference`` is reported when both were evaluated.
+        confidence: Confidence level of the intervals.
 
     Returns:
-        The table as a string.
+        ``{policy: {"vs": {baseline: PairedDiff.as_dict()}, "hindsight_share":
+        HindsightShare.as_dict() or None}}``; a policy is not compared with itself, and
+        ``hindsight_share`` is there only when hindsight and the reference were evaluated
+        (None when hindsight does not beat the reference on average).
     """
-    with_ref = reference in results
-    header = ["policy", "TTD", "makespan", "max wait", "s/episode"]
-    if with_ref:
-        header.append(f"TTD vs {reference.upper()}")
+    out: dict[str, dict[str, Any]] = {}
+    for name, entry in _compare(results, reference, compare_to, hindsight, confidence).items():
+        item: dict[str, Any] = {"vs": {base: diff.as_dict() for base, diff in entry.vs.items()}}
+        if entry.has_share:
+            item["hindsight_share"] = None if entry.share is None else entry.share.as_dict()
+        out[name] = item
+    return out
+
+
+def _label(name: str) -> str:
+    """A baseline's name in a column header: MPDM, RBTS; other names as they are."""
+    return name.upper() if name.isalpha() else name
+
+
+def _mean_ci(values: Sequence[float], confidence: float) -> str:
+    mean, half = mean_ci(values, confidence)
+    return f"{mean:.2f}" if half is None else f"{mean:.2f} ± {half:.2f}"
+
+
+def _diff_cell(diff: PairedDiff) -> str:
+    if diff.pct is None:
+        return "n/a"
+    if diff.pct_low is None or diff.pct_high is None:
+        return f"{diff.pct:+.1f}% [n/a]"
+    star = "*" if diff.significant else ""
+    return f"{diff.pct:+.1f}% [{diff.pct_low:+.1f}, {diff.pct_high:+.1f}]{star}"
+
+
+def _share_cell(share: HindsightShare | None) -> str:
+    if share is None:
+        return "n/a"
+    if share.low is None or share.high is None:
+        return f"{100 * share.share:.0f}%"
+    return f"{100 * share.share:.0f}% [{100 * share.low:.0f}, {100 * share.high:.0f}]"
+
+
+def _legend(
+    n: int, confidence: float, baselines: list[str], with_share: bool, reference: str
+) -> str:
+    level = f"{100 * confidence:g}%"
+    if n < 2:
+        parts = ["1 seed: no intervals (run 2+ seeds)"]
+    else:
+        parts = [f"± and [low, high]: {level} Student t-intervals over {n} seeds"]
+    if baselines:
+        parts.append("vs X: TTD below X's, paired per seed, in % of X's mean (+ = better)")
+        if n >= 2:
+            parts.append("* = interval excludes 0")
+    if with_share:
+        parts.append(
+            f"hindsight share: part of hindsight's TTD gain over {_label(reference)} reached"
+        )
+    return "; ".join(parts)
+
+
+def format_table(
+    results: Results,
+    reference: str = "mpdm",
+    lower_bound: Sequence[float] | None = None,
+    compare_to: str | None = None,
+    hindsight: str = HINDSIGHT,
+    confidence: float = 0.95,
+) -> str:
+    """A markdown table of the policies' metrics and paired comparisons, and a legend.
+
+    Per policy: mean ± t-interval half-width over seeds of TTD, makespan and maximum
+    wait, seconds per episode, then the paired TTD difference against ``reference``
+    and ``compare_to`` in percent of the baseline's mean, with its interval and a
+    ``*`` when the interval excludes 0 (:func:`~rtaw_marl.evaluation.stats.
+    paired_difference`).
+
+    Args:
+        results: ``{policy: {metric: [per seed]}}`` as returned by ``evaluate``.
+        reference: The main baseline (MPDM); its column is left out when it was not
+            evaluated.
+        lower_bound: Per-seed TTD lower bounds; adds a bound row and a gap column.
+        compare_to: A second baseline; adds a column when it was evaluated.
+        hindsight: The policy that knows the future; when it and ``reference`` were
+            evaluated, its row is labelled as a reference and a column gives every
+            policy's share of its gain over ``reference``.
+        confidence: Confidence level of the intervals.
+
+    Returns:
+        The table and a one-line legend below it, as a string.
+    """
+    baselines = _baselines(results, reference, compare_to)
+    compared = _compare(results, reference, compare_to, hindsight, confidence)
+    with_share = hindsight in results and reference in results
+    level = f"{100 * confidence:g}% CI"
+    header = [
+        "policy",
+        f"TTD ± {level}",
+        f"makespan ± {level}",
+        f"max wait ± {level}",
+        "s/episode",
+    ]
+    header += [f"TTD vs {_label(base)}" for base in baselines]
+    if with_share:
+        header.append("hindsight share")
     if lower_bound is not None:
         header.append("gap to bound")
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     if lower_bound is not None:
-        bound_row = ["lower bound", _mean_std(lower_bound), "", "", ""]
+        bound_row = ["lower bound", _mean_ci(lower_bound, confidence)]
         bound_row += [""] * (len(header) - len(bound_row))
         lines.append("| " + " | ".join(bound_row) + " |")
     for name, metrics in results.items():
+        label = (
+            f"{name} (reference: knows the future)" if with_share and name == hindsight else name
+        )
         row = [
-            name,
-            _mean_std(metrics["ttd"]),
-            _mean_std(metrics["makespan"]),
-            _mean_std(metrics["wait_max"]),
+            label,
+            _mean_ci(metrics["ttd"], confidence),
+            _mean_ci(metrics["makespan"], confidence),
+            _mean_ci(metrics["wait_max"], confidence),
             f"{np.mean(metrics['wall_time_s']):.3f}",
         ]
-        if with_ref:
-            row.append(f"{improvement(results[reference]['ttd'], metrics['ttd']):+.1f}%")
+        entry = compared[name]
+        row += [_diff_cell(entry.vs[base]) if base in entry.vs else "—" for base in baselines]
+        if with_share:
+            # The share is 0 and 1 by definition on the two references' own rows.
+            row.append("—" if name in (reference, hindsight) else _share_cell(entry.share))
         if lower_bound is not None:
             row.append(f"{np.mean(gap_to_bound(metrics['ttd'], lower_bound)):.1f}%")
         lines.append("| " + " | ".join(row) + " |")
+    n = min((len(m["ttd"]) for m in results.values()), default=0)
+    lines.append(_legend(n, confidence, baselines, with_share, reference))
     return "\n".join(lines)
 
 
+def json_safe(value: Any) -> Any:
+    """``value`` with every NaN or infinite float replaced by None, numpy scalars and
+    arrays made plain, tuples made lists: strict JSON has no NaN or Infinity."""
+    if isinstance(value, Mapping):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
 def write_json_atomic(path: str | Path, payload: Any) -> Path:
-    """Write ``payload`` as indented JSON, atomically (temporary file + rename)."""
-    data = json.dumps(payload, indent=2).encode()
+    """Write ``payload`` as indented, strict JSON, atomically (temporary file + rename).
+
+    Non-finite floats become ``null`` (:func:`json_safe`), so every JSON parser reads it.
+    """
+    data = json.dumps(json_safe(payload), indent=2, allow_nan=False).encode()
     return atomic_write(path, lambda fh: fh.write(data))

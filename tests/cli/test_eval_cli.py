@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import json
+import math
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from omegaconf import DictConfig
+from scipy import stats as scipy_stats
 
 from rtaw_marl.cli.common import sim_spec, typed
 from rtaw_marl.cli.eval import run
@@ -98,6 +102,162 @@ def test_results_json_shape(tmp_path: Path) -> None:
     assert not list(out.parent.glob(".*tmp"))
 
 
+def _strict_json(path: Path) -> dict:
+    """``path`` parsed as strict JSON: NaN or Infinity fail the test."""
+
+    def reject(constant: str) -> None:
+        raise AssertionError(f"{path} holds {constant}, which is not JSON")
+
+    return json.loads(path.read_text(), parse_constant=reject)
+
+
+def _t_interval(baseline: list[float], other: list[float]) -> tuple[float, float, float]:
+    """Mean and 95% paired t-interval of ``baseline - other``, straight from scipy."""
+    d = np.asarray(baseline) - np.asarray(other)
+    low, high = scipy_stats.t.interval(0.95, len(d) - 1, loc=d.mean(), scale=scipy_stats.sem(d))
+    return float(d.mean()), float(low), float(high)
+
+
+def test_results_json_comparisons_match_per_seed_values(tmp_path: Path, cli) -> None:
+    """The comparisons block recomputed from the per-seed TTDs; no lower bound by default."""
+    out = tmp_path / "r.json"
+    result = cli(
+        "eval",
+        "scenario=poc",
+        "policy=[mpdm,rbts,random]",
+        "seeds=[0,1,2]",
+        "progress=false",
+        f"output={out}",
+    )
+    assert result.code == 0, result.err
+    data = _strict_json(out)
+    ttd = {name: data["policies"][name]["ttd"] for name in ("mpdm", "rbts", "random")}
+    comparisons = data["comparisons"]
+    assert comparisons["mpdm"] == {"vs": {}}
+    for name in ("rbts", "random"):
+        vs = comparisons[name]["vs"]
+        assert set(vs) == {"mpdm"}
+        mean, low, high = _t_interval(ttd["mpdm"], ttd[name])
+        base = float(np.mean(ttd["mpdm"]))
+        got = vs["mpdm"]
+        assert got["n"] == 3
+        assert got["baseline_mean"] == pytest.approx(base)
+        assert got["other_mean"] == pytest.approx(np.mean(ttd[name]))
+        assert got["mean_diff"] == pytest.approx(mean)
+        if low == high or math.isnan(low):  # identical per-seed differences: zero width
+            assert got["ci"] == pytest.approx([mean, mean])
+        else:
+            assert got["ci"] == pytest.approx([low, high])
+        assert got["pct"] == pytest.approx(100 * mean / base)
+        assert got["pct_ci"] == pytest.approx([100 * v / base for v in got["ci"]])
+        assert got["significant"] == (got["ci"][0] > 0 or got["ci"][1] < 0)
+    # The paper's proof of concept is deterministic for RBTS: 18.8% better on every seed.
+    assert comparisons["rbts"]["vs"]["mpdm"]["pct"] == pytest.approx(18.8, abs=0.05)
+    assert comparisons["rbts"]["vs"]["mpdm"]["significant"] is True
+    assert "hindsight_share" not in comparisons["rbts"]
+    # The lower bound is opt-in.
+    assert (data["lower_bound"], data["lower_bound_time_s"]) == (None, None)
+    assert "gap_pct" not in data["policies"]["mpdm"]
+    assert "lower bound" not in result.out
+    # The table: CI header, the paired cell, and the legend under it.
+    assert "| TTD ± 95% CI |" in result.out
+    assert "+18.8% [+18.8, +18.8]*" in result.out
+    assert "* = interval excludes 0" in result.out
+
+
+def test_compare_to_adds_a_second_baseline(tmp_path: Path, cli) -> None:
+    out = tmp_path / "r.json"
+    result = cli(
+        "eval",
+        "scenario=poc",
+        "policy=[mpdm,rbts,random]",
+        "seeds=[0,1]",
+        "compare_to=rbts",
+        "progress=false",
+        f"output={out}",
+    )
+    assert result.code == 0, result.err
+    data = _strict_json(out)
+    assert data["config"]["compare_to"] == "rbts"
+    comparisons = data["comparisons"]
+    assert set(comparisons["mpdm"]["vs"]) == {"rbts"}
+    assert set(comparisons["rbts"]["vs"]) == {"mpdm"}
+    assert set(comparisons["random"]["vs"]) == {"mpdm", "rbts"}
+    ttd = {name: data["policies"][name]["ttd"] for name in ("rbts", "random")}
+    mean, _, _ = _t_interval(ttd["rbts"], ttd["random"])
+    assert comparisons["random"]["vs"]["rbts"]["mean_diff"] == pytest.approx(mean)
+    assert comparisons["mpdm"]["vs"]["rbts"]["pct"] == pytest.approx(
+        -100 * (22.737 - 18.463) / 18.463, abs=0.05
+    )
+    header = result.out.splitlines()[1]
+    assert "TTD vs MPDM" in header
+    assert "TTD vs RBTS" in header
+
+
+def test_compare_to_must_be_evaluated(cli) -> None:
+    """A compare_to that is not among the policies: one line, exit 2, before any episode."""
+    result = cli("eval", "scenario=poc", "policy=[mpdm,rbts]", "compare_to=random")
+    assert result.code == 2
+    assert result.err.strip() == (
+        "error: compare_to=random is not an evaluated policy; evaluated: mpdm, rbts"
+    )
+    assert "| policy" not in result.out
+
+
+def test_one_seed_gives_null_intervals(tmp_path: Path, cli) -> None:
+    out = tmp_path / "r.json"
+    result = cli(
+        "eval",
+        "scenario=poc",
+        "policy=[mpdm,rbts]",
+        "seeds=[0]",
+        "progress=false",
+        f"output={out}",
+    )
+    assert result.code == 0, result.err
+    vs = _strict_json(out)["comparisons"]["rbts"]["vs"]["mpdm"]
+    assert (vs["ci"], vs["pct_ci"], vs["sd_diff"], vs["significant"]) == (None, None, None, False)
+    assert "+18.8% [n/a]" in result.out
+
+
+def test_lower_bound_on_request_is_timed(tmp_path: Path, cli) -> None:
+    out = tmp_path / "r.json"
+    result = cli(
+        "eval",
+        "scenario=poc",
+        "policy=[mpdm,rbts]",
+        "seeds=[0,1]",
+        "lower_bound=true",
+        "progress=false",
+        f"output={out}",
+    )
+    assert result.code == 0, result.err
+    data = _strict_json(out)
+    assert len(data["lower_bound"]) == 2
+    assert data["lower_bound_time_s"] >= 0
+    assert len(data["policies"]["mpdm"]["gap_pct"]) == 2
+    assert re.search(r"^lower bound: \d+\.\d s$", result.out, re.M)
+    assert "gap to bound" in result.out
+    assert "| lower bound |" in result.out
+
+
+def test_lower_bound_skipped_in_paper_mode(tmp_path: Path, cli) -> None:
+    out = tmp_path / "r.json"
+    result = cli(
+        "eval",
+        "scenario=two_task",
+        "policy=[mpdm]",
+        "seeds=[0]",
+        "lower_bound=true",
+        "progress=false",
+        f"output={out}",
+    )
+    assert result.code == 0, result.err
+    data = _strict_json(out)
+    assert (data["lower_bound"], data["lower_bound_time_s"]) == (None, None)
+    assert "lower bound: skipped (drain mode only)" in result.out
+
+
 def _cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [str(RTAW_EVAL), *args], cwd=cwd, capture_output=True, text=True, timeout=300
@@ -110,12 +270,13 @@ def _cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
         (["env.num_robots=0"], "env.num_robots must be >= 1"),
         (["env.queue_len=0"], "env.queue_len must be >= 1"),
         (["layout.path=missing.map"], "layout file not found"),
-        (["policy=[nope]"], "unknown policy 'nope'; available: mpdm, random, rbts"),
+        (["policy=[nope]"], "unknown policy 'nope'; available: "),
         (["tasks=file"], "tasks.path"),
         (["tasks=file", "tasks.path=missing.csv"], "task file not found"),
         (["navigator=sipp", "env.noise_var=0.25"], "set env.noise_mean=0 env.noise_var=0"),
         (["navigator=cbs", "navigator.max_nodes=0"], "navigator.max_nodes must be a positive"),
         (["navigator=sipp", "+navigator.window=5"], "unknown config key 'navigator.window'"),
+        (["compare_to=nope"], "compare_to=nope is not an evaluated policy"),
     ],
 )
 def test_cli_errors_are_one_line(args: list[str], message: str, cli) -> None:

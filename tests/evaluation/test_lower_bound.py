@@ -1,11 +1,17 @@
-"""The assignment lower bound on TTD: valid for every policy, tight where it should be."""
+"""The assignment lower bound on TTD: valid for every policy, tight where it should be,
+refused where it is not defined (``paper`` mode, streams that refill the same slot).
+
+``test_lower_bound_exhaustive.py`` checks it against exhaustive search on tiny instances.
+"""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
+from scipy.optimize import linear_sum_assignment
 
 from rtaw_marl.cli.eval import run
 from rtaw_marl.config import compose
@@ -14,6 +20,7 @@ from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.tasks import FixedTasks
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
@@ -80,6 +87,87 @@ def test_a_task_never_follows_itself() -> None:
     assert ttd_lower_bound(sim, 0) == 5.0
 
 
+def test_first_tasks_come_from_the_queue() -> None:
+    """Robots free together act in id order, each on a task queued by then.
+
+    Robot 0 (at x=0) must take task 0 (origin x=9, the only queued task) and robot 1 (at
+    x=9) then takes task 1 (origin x=0): 18 whatever the policy. Ignoring the queue,
+    each robot would take the task at its feet for 0.
+    """
+    tasks = FixedTasks([[9, 0, 8, 0], [0, 0, 1, 0]])
+    sim = SimSpec.of(
+        {"num_robots": 2, "num_tasks": 2, "queue_len": 1, "robot_starts": [[0, 0], [9, 0]]},
+        {"name": "open", "width": 10, "height": 1},
+        "astar",
+        tasks,
+    ).build()
+    assert untimed_assignment_bound(sim, 0) == 0.0
+    assert ttd_lower_bound(sim, 0) == 18.0
+    sim.reset(0)
+    assert -(sim.step(0) + sim.step(0)) == 18.0
+
+
+def test_a_robot_free_again_at_once_keeps_the_bound_valid() -> None:
+    """A zero-length task at robot 0's feet frees it at t=0 again: it wins the tie and
+    takes task 1 too, so robot 1 never moves and the episode's TTD is 0."""
+    tasks = FixedTasks([[0, 0, 0, 0], [0, 0, 5, 0]])
+    sim = SimSpec.of(
+        {
+            "num_robots": 2,
+            "num_tasks": 2,
+            "queue_len": 1,
+            "robot_starts": [[0, 0], [9, 0]],
+            "noise_mean": 0,
+            "noise_var": 0,
+        },
+        {"name": "open", "width": 10, "height": 1},
+        "astar",
+        tasks,
+    ).build()
+    sim.reset(0)
+    assert sim.step(0) == 0.0
+    assert sim.robot == 0
+    assert sim.step(0) == 0.0
+    assert sim.done
+    assert ttd_lower_bound(sim, 0) == 0.0
+
+
+def untimed_assignment_bound(sim: WarehouseSim, seed: int) -> float:
+    """The first version of the bound: ends to origins on the pre-drawn task list, with
+    no timing (kept here to show why refilling streams must be refused)."""
+    sim.reset(seed)
+    tasks = sim.tasks[: sim.config.num_tasks]
+    ends = np.concatenate([sim.robot_start_xy, tasks[:, 2:]])
+    cost = sim.navigator.distance_matrix(ends, tasks[:, :2])
+    t = len(tasks)
+    cost[sim.num_robots + np.arange(t), np.arange(t)] = np.inf
+    rows, cols = linear_sum_assignment(cost)
+    return float(cost[rows, cols].sum())
+
+
+def test_same_slot_refill_is_refused() -> None:
+    """Regression: with ``two_task`` the policy chooses which tasks are served.
+
+    The pre-drawn list alternates the short task (0,0)->(3,3) and the long one
+    (0,0)->(9,9), but a policy that always takes the short one serves only short tasks,
+    and beats what an assignment on that list claimed to be a lower bound.
+    """
+    sim = SimSpec.of(
+        {"num_robots": 10, "num_tasks": 200, "queue_len": 2, "noise_mean": 0, "noise_var": 0},
+        {"name": "open", "width": 10, "height": 10},
+        "direct",
+        "two_task",
+    ).build()
+    claimed = untimed_assignment_bound(sim, 0)
+    sim.reset(0)
+    while not sim.done:
+        sim.step(int(np.argmin(np.where(sim.queue_mask, sim.queue_length, np.inf))))
+    short = sim.metrics().ttd
+    assert short < 0.6 * claimed  # about 865 against 1,628
+    with pytest.raises(ConfigError, match=r"refill the same slot.*depends on the policy"):
+        ttd_lower_bound(sim, 0)
+
+
 def test_paper_mode_is_rejected() -> None:
     sim = SimSpec.of(
         {"num_robots": 2, "num_tasks": 10, "episode_mode": "paper"}, "open", "direct", "random"
@@ -110,6 +198,7 @@ def test_rtaw_eval_reports_bound_and_gaps(tmp_path: Path) -> None:
             "seeds=[0,1]",
             f"output={out}",
             "progress=false",
+            "lower_bound=true",
         ],
     )
     run(cfg)

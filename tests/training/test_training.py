@@ -35,8 +35,10 @@ def test_resume_continues_frames_and_reloads_parameters(train_cfg, tmp_path: Pat
     # Reloaded parameters reproduce the checkpoint's own evaluation exactly.
     actor, _ = build_networks(ckpt["model_config"])
     actor.load_state_dict(ckpt["model"]["actor"])
-    env = BatchedWarehouseEnv(SimSpec.of(**_poc_spec()), num_envs=5, seed=0)
-    ttd = sum(greedy_ttd(actor, env, list(ckpt["config"]["eval"]["seeds"]))) / 5
+    seeds = list(ckpt["config"]["eval"]["seeds"])
+    assert seeds == list(range(1000, 1010))  # selection seeds, never the evaluation seeds
+    env = BatchedWarehouseEnv(SimSpec.of(**_poc_spec()), num_envs=len(seeds), seed=0)
+    ttd = sum(greedy_ttd(actor, env, seeds)) / len(seeds)
     assert ttd == pytest.approx(ckpt["eval"]["ttd"])
 
     resumed = train(

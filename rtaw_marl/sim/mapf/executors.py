@@ -19,7 +19,7 @@ from abc import abstractmethod
 
 import numpy as np
 
-from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.fleet import Fleet
@@ -100,10 +100,19 @@ class FleetExecutor(Executor):
     def next_robot(self, now: float) -> tuple[int, float]:
         fleet = self.fleet
         free_at = fleet.free_at
-        if np.isinf(free_at.min()):
-            # Every robot waits for another: move some aside (or raise PlanningError).
+        # Every robot waits for another: move some aside (or raise PlanningError). One
+        # resolve may free a robot only partly (its path still ends in a wait), so repeat;
+        # each round either frees a robot or raises, so M + 1 rounds are enough.
+        for _ in range(fleet.num_robots + 1):
+            if not np.isinf(free_at.min()):
+                break
             fleet.resolve(int(now))
             self._records.robot_free_at[:] = fleet.estimated_free_at
+        else:
+            raise PlanningError(
+                f"{self.name}: every robot is blocked at t={int(now)} and moving robots aside "
+                "did not free any (a deadlock this planner cannot resolve)"
+            )
         robot = int(free_at.argmin())
         return robot, float(free_at[robot])
 

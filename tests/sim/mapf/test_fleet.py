@@ -291,3 +291,18 @@ def test_random_small_layouts_complete_without_conflicts(nav: str, scenario: tup
     """Any small connected layout with room to spare: every task is delivered, no conflict."""
     layout, starts, tasks = scenario
     play(layout, nav, starts, tasks, queue_len=2)
+
+
+def test_all_robots_blocked_is_a_planning_error_not_infinite_time() -> None:
+    """Regression: when every robot was deferred, one partial resolve could leave the
+    next robot selected at t=inf, and the next step crashed with OverflowError."""
+    env = {"num_robots": 3, "num_tasks": 5, "queue_len": 3, "noise_mean": 0, "noise_var": 0,
+           "robot_starts": [[1, 0], [2, 1], [0, 1]], "robot_free_times": [0, 3, 2]}  # fmt: skip
+    tasks = FixedTasks([[0, 1, 1, 1], [2, 0, 2, 1], [0, 0, 2, 0], [0, 1, 1, 1], [2, 0, 2, 1]])
+    sim = SimSpec.of(env, {"name": "open", "width": 3, "height": 2}, "sipp", tasks).build()
+    sim.reset(0)
+    for action in [1, 0, 2, 0]:
+        sim.step(action)
+        assert sim.time < float("inf")
+    with pytest.raises(PlanningError, match="deadlocked"):
+        sim.step(1)
