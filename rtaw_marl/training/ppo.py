@@ -70,6 +70,25 @@ class Learner:
     optim: torch.optim.Optimizer
 
 
+class Clock:
+    """Wall time of each phase of one iteration (logged as ``time/<phase>_s``)."""
+
+    def __init__(self) -> None:
+        self.laps: dict[str, float] = {}
+        self._last = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        """Charge the time since the last lap to ``name``."""
+        now = time.perf_counter()
+        self.laps[name] = self.laps.get(name, 0.0) + now - self._last
+        self._last = now
+
+    def reset(self) -> None:
+        """Start the next iteration: the collector's time counts from here."""
+        self.laps = {}
+        self._last = time.perf_counter()
+
+
 @dataclass
 class Progress:
     """Where a run stands (restored on resume)."""
@@ -115,21 +134,28 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         saver.save(row)
 
     next_eval = progress.frames + cfg.eval.every_frames
+    frames_at_start = progress.frames
     try:
         if progress.frames == 0:
             evaluate_and_save()
+        clock = Clock()
         for data in collector:
+            clock.lap("time/collect_s")
             progress.frames += data.numel()
             progress.iteration += 1
-            stats = _train_step(cfg, learner, buffer, data, keys, reward_scale, progress)
+            stats = _train_step(cfg, learner, buffer, data, keys, reward_scale, progress, clock)
             collector.update_policy_weights_()
-            bar.update(data.numel())
-            stats["charts/fps"] = progress.frames / (time.perf_counter() - start)
-            logger.log(stats, progress.frames)
+            clock.lap("time/sync_s")
             done = progress.frames >= cfg.frames
             if progress.frames >= next_eval or done:
                 next_eval += cfg.eval.every_frames
                 evaluate_and_save()
+            clock.lap("time/eval_checkpoint_s")
+            bar.update(data.numel())
+            elapsed = time.perf_counter() - start
+            stats["charts/fps"] = (progress.frames - frames_at_start) / elapsed
+            logger.log({**stats, **clock.laps}, progress.frames)
+            clock.reset()
             if done:
                 break
     finally:
@@ -342,6 +368,7 @@ def _train_step(
     keys: TrainKeys,
     reward_scale: float,
     progress: Progress,
+    clock: Clock,
 ) -> dict[str, float]:
     """Anneal the entropy coefficient, then one PPO update; returns the logged scalars."""
     algo = cfg.algo
@@ -351,7 +378,7 @@ def _train_step(
     )
     learner.loss.entropy_coeff.fill_(entropy_coeff)
     raw_reward = acting_reward(data, keys)
-    stats = _update(data, learner, buffer, algo, reward_scale, keys)
+    stats = _update(data, learner, buffer, algo, reward_scale, keys, clock)
     return {"train/reward_mean": raw_reward, "train/entropy_coeff": entropy_coeff, **stats}
 
 
@@ -362,12 +389,14 @@ def _update(
     algo: PPOConfig,
     reward_scale: float,
     keys: TrainKeys,
+    clock: Clock,
 ) -> dict[str, float]:
     """One PPO update on a collected batch ``[..., T]``: GAE, then epochs of minibatches."""
     data["next", keys.reward] = data["next", keys.reward] * reward_scale
     with torch.no_grad():
         learner.gae(data)
     buffer.extend(data.reshape(-1))
+    clock.lap("time/gae_s")
     totals = {"losses/objective": 0.0, "losses/critic": 0.0, "losses/entropy": 0.0}
     steps = 0
     for _ in range(algo.epochs):
@@ -384,4 +413,5 @@ def _update(
             totals["losses/critic"] += out["loss_critic"].item()
             totals["losses/entropy"] += out["loss_entropy"].item()
             steps += 1
+    clock.lap("time/update_s")
     return {k: v / max(steps, 1) for k, v in totals.items()}

@@ -205,3 +205,19 @@ def test_interrupted_save_keeps_previous_checkpoint(tmp_path: Path, monkeypatch)
     monkeypatch.undo()
     assert load_checkpoint(path)["frames"] == 1
     assert [p.name for p in tmp_path.iterdir()] == ["last.pt"]
+
+
+@pytest.mark.parametrize("launcher", ["basic", "joblib"])
+def test_multirun_sweep_trains_each_job_into_its_own_folder(cli, tmp_path: Path, launcher: str):
+    """``rtaw-train -m seed=0,1``: one run folder per job, each with its checkpoints."""
+    result = cli(
+        "train", "--multirun", "seed=0,1", "scenario=poc", "frames=256",
+        "algo.frames_per_batch=256", "algo.minibatch_size=64", "collector.envs_per_worker=4",
+        "eval.seeds=[1000]", "eval.every_frames=256", "progress=false",
+        f"hydra/launcher={launcher}", f"hydra.sweep.dir={tmp_path / 'sweep'}",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    runs = sorted((tmp_path / "sweep").glob("*/checkpoints/last.pt"))
+    assert [p.parts[-3] for p in runs] == ["0", "1"]
+    seeds = {load_checkpoint(p)["config"]["seed"] for p in runs}
+    assert seeds == {0, 1}
