@@ -336,3 +336,39 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     assert (cfg.layout.preset, cfg.navigator.name, cfg.pretrained) == ("D", "astar", "D_astar_m10")
     assert cfg.env.episode_mode == "paper"
     assert list(cfg.policy) == ["mpdm", "rbts", "rtaw"]
+
+
+RULES = "policy=[mpdm,rbts,lookahead,hungarian,hindsight]"
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        ["scenario=poc"],
+        ["scenario=two_task", "env.num_tasks=40"],
+        ["scenario=two_task", "env.num_tasks=40", "env.episode_mode=drain"],
+        *(
+            [f"layout={layout}", "tasks=random", "env.num_tasks=12"]
+            for layout in ("open", "shelves", "warehouse", "A", "B", "C", "D", "E")
+        ),
+        *(
+            [
+                f"navigator={nav}",
+                "layout=A",
+                "tasks=random",
+                "env.num_robots=4",
+                "env.num_tasks=12",
+            ]
+            for nav in ("direct", "sipp", "cbs")
+        ),
+    ],
+    ids=lambda o: " ".join(o),
+)
+def test_every_rule_runs_everywhere(overrides: list[str], cli, tmp_path: Path) -> None:
+    """The rules and the hindsight reference run on every scenario, layout and navigator."""
+    out = tmp_path / "r.json"
+    result = cli("eval", RULES, *overrides, "seeds=[0,1]", "progress=false", f"output={out}")
+    assert result.code == 0, result.err
+    data = json.loads(out.read_text())
+    assert set(data["policies"]) == {"mpdm", "rbts", "lookahead", "hungarian", "hindsight"}
+    assert "hindsight (reference: knows the future)" in result.out
