@@ -15,12 +15,13 @@ $(STAMP): pyproject.toml
 
 DEMO_RUN := runs/demo
 
-# Train RTAW briefly on the default scenario, then compare it with MPDM and RBTS.
+# Train RTAW briefly (the fast default PPO), then compare it with MPDM, RBTS and lookahead.
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
-	$(BIN)/rtaw-train frames=40960 eval.every_frames=10240 output_dir=$(DEMO_RUN)
-	$(BIN)/rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
-		seeds=[0,1,2,3,4] output=$(DEMO_RUN)/results.json
+	$(BIN)/rtaw-train frames=204800 eval.every_frames=40960 output_dir=$(DEMO_RUN)
+	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,checkpoint] \
+		checkpoint=$(DEMO_RUN)/checkpoints/best.pt seeds=[0,1,2,3,4,5,6,7,8,9] \
+		output=$(DEMO_RUN)/results.json
 
 test: $(STAMP)
 	$(BIN)/ruff check rtaw_marl tests experiments

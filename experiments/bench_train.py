@@ -1,8 +1,17 @@
-"""Benchmark of the training stack: collection speed, policy latency, time to beat MPDM.
+"""Benchmark of the training stack: end-to-end PPO throughput, collection alone, policy
+latency, time to beat MPDM.
+
+The end-to-end table runs ``train()`` as ``rtaw-train`` does (the default ``algo=ppo``;
+N = 10, A*, the default 60x60 warehouse, designated tasks) for M = 10, 100 and 1000
+robots with 1 and 2 collector workers, and reports frames per second over the whole run
+(start-up, evaluation and checkpoints included) and in steady state (the iterations
+only), with the seconds per 8192-frame batch spent collecting, computing advantages
+(GAE), updating, syncing weights and evaluating + checkpointing.
 
 Usage::
 
-    python experiments/bench_train.py              # collection + latency (about 2 minutes)
+    python experiments/bench_train.py              # everything (about 10 minutes)
+    python experiments/bench_train.py --e2e-only   # the end-to-end table only
     python experiments/bench_train.py --train      # + wall time for rtaw-train to beat MPDM
     python experiments/bench_train.py --quick      # tiny sizes, a smoke run
 
@@ -106,6 +115,51 @@ def bench_time_to_beat_mpdm(frames: int, every: int, algo: str) -> tuple[list[di
     return result.history, result.mpdm_ttd
 
 
+PHASES = ("collect", "gae", "update", "sync", "eval_checkpoint")
+
+
+def bench_end_to_end(m: int, workers: int, frames: int, quick: bool) -> dict[str, float]:
+    """One ``train()`` run; frames/s overall and in steady state, seconds per batch by phase."""
+    from rtaw_marl.training.ppo import train
+
+    overrides = [f"env.num_robots={m}", f"collector.workers={workers}", f"frames={frames}",
+                 f"eval.every_frames={frames // 2}", "progress=false"]  # fmt: skip
+    if quick:
+        overrides += ["algo.frames_per_batch=1024", "algo.minibatch_size=256"]
+    cfg = to_typed(compose("train", overrides))
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        result = train(cfg, tmp)
+        wall = time.perf_counter() - start
+    batches = result.frames / cfg.algo.frames_per_batch
+    steady = sum(result.timings.values())
+    out = {"overall": result.frames / wall, "steady": result.frames / steady, "wall": wall}
+    out.update({p: result.timings.get(f"time/{p}_s", 0.0) / batches for p in PHASES})
+    return out
+
+
+def end_to_end_table(quick: bool) -> list[str]:
+    lines = [
+        "| M | workers | frames | frames/s overall | frames/s steady | s per batch: collect "
+        "/ GAE / update / sync / eval+ckpt | target |",
+        "|---:|---:|---:|---:|---:|---|---|",
+    ]
+    targets = {10: ">= 10,000", 100: ">= 6,000", 1000: ">= 1,500"}
+    sizes = [(10, 1, 8192)] if quick else [
+        (10, 1, 163840), (10, 2, 163840), (100, 1, 81920), (100, 2, 81920),
+        (1000, 1, 16384),
+    ]  # fmt: skip
+    for m, workers, frames in sizes:
+        r = bench_end_to_end(m, workers, frames, quick)
+        phases = " / ".join(f"{r[p]:.2f}" for p in PHASES)
+        lines.append(
+            f"| {m} | {workers} | {frames:,} | {r['overall']:,.0f} | {r['steady']:,.0f} | "
+            f"{phases} | {targets[m]} |"
+        )
+        print(lines[-1], flush=True)
+    return lines
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="tiny sizes (smoke run)")
@@ -113,12 +167,22 @@ def main() -> int:
     parser.add_argument("--train-frames", type=int, default=204800)
     parser.add_argument("--algo", default="ppo_fast", help="algo config for --train")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--e2e-only", action="store_true", help="only the end-to-end table")
     parser.add_argument("--output", type=Path, default=None)
     args = parser.parse_args()
     torch.set_num_threads(1)
     lines = [
         f"machine: {platform.platform()}, {torch.get_num_threads()} torch thread, "
         f"python {platform.python_version()}, torch {torch.__version__}",
+        "",
+        *end_to_end_table(args.quick),
+    ]
+    if args.e2e_only:
+        print("\n".join(lines))
+        if args.output:
+            args.output.write_text("\n".join(lines) + "\n")
+        return 0
+    lines += [
         "",
         "| M | workers | envs/worker | frames/s (median) | spread | target |",
         "|---:|---:|---:|---:|---|---|",

@@ -9,7 +9,8 @@ A checkpoint is a ``torch.save`` dict:
 ``config``        the resolved training config
 ``versions``      library versions (python, torch, torchrl, tensordict, numpy, rtaw_marl)
 ``frames``        frames collected so far; ``iteration``: updates done
-``eval``          the latest evaluation figures; ``command``: the command line
+``eval``          the latest evaluation figures; ``history``: every evaluation so far
+``command``       the command line
 
 It is written to a temporary file in the same folder, fsynced and renamed over the
 target, so a kill at any moment leaves the previous or the new checkpoint, both loadable.

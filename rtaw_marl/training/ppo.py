@@ -57,6 +57,8 @@ class TrainResult:
     mpdm_ttd: float
     best_ttd: float
     history: list[dict[str, float]] = field(default_factory=list)
+    #: Seconds spent per phase over the run (``time/collect_s``, ``time/update_s``, ...).
+    timings: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -113,8 +115,8 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     spec = SimSpec.of(cfg.env, cfg.layout, cfg.navigator, cfg.tasks)
     keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
     learner = build_learner(cfg, keys)
-    progress = _resume(cfg, learner) if cfg.resume else Progress()
-    evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds])
+    progress, history = _resume(cfg, learner) if cfg.resume else (Progress(), [])
+    evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history)
     collector = build_collector(cfg, spec, learner, keys, progress)
     buffer = TensorDictReplayBuffer(
         storage=LazyTensorStorage(cfg.algo.frames_per_batch),
@@ -131,10 +133,11 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         row = evaluator.run(learner.actor_net, progress, time.perf_counter() - start)
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
         bar.set_postfix(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
-        saver.save(row)
+        saver.save(row, evaluator.history)
 
     next_eval = progress.frames + cfg.eval.every_frames
     frames_at_start = progress.frames
+    totals: dict[str, float] = {}
     try:
         if progress.frames == 0:
             evaluate_and_save()
@@ -155,6 +158,8 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
             elapsed = time.perf_counter() - start
             stats["charts/fps"] = (progress.frames - frames_at_start) / elapsed
             logger.log({**stats, **clock.laps}, progress.frames)
+            for name, seconds in clock.laps.items():
+                totals[name] = totals.get(name, 0.0) + seconds
             clock.reset()
             if done:
                 break
@@ -165,7 +170,7 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     plot_training_curve(evaluator.history, run_dir / "training_curve.png")
     return TrainResult(
         run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
-        progress.best_ttd, evaluator.history,
+        progress.best_ttd, evaluator.history, totals,
     )  # fmt: skip
 
 
@@ -215,7 +220,9 @@ def build_learner(cfg: TrainConfig, keys: TrainKeys) -> Learner:
     loss.set_keys(action=keys.action, sample_log_prob=keys.log_prob, **shared_keys)
     # Interop route: only the acting robot's row of each step counts in the loss.
     loss.loss_mask_key = keys.loss_mask
-    gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic)
+    # shifted: one critic pass over [T + 1] steps instead of two over [T] (obs and next
+    # obs); exact here, since next obs[t] is obs[t + 1] unless the episode ended at t.
+    gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic, shifted=not cfg.interop)
     gae.set_keys(**shared_keys)
     optim = torch.optim.Adam(loss.parameters(), lr=algo.lr)
     return Learner(actor_net, critic_net, loss, gae, optim)
@@ -232,7 +239,7 @@ def build_collector(
     if cfg.interop:
         make_env = [partial(make_interop_env, spec, seed) for seed in seeds]
     else:
-        make_env = [partial(BatchedWarehouseEnv, spec, envs, seed) for seed in seeds]
+        make_env = [partial(_worker_env, spec, envs, seed, workers) for seed in seeds]
     batch = cfg.algo.frames_per_batch
     remaining = max(cfg.frames - progress.frames, batch)
     kwargs = {
@@ -249,7 +256,15 @@ def build_collector(
     return collector
 
 
-def _resume(cfg: TrainConfig, learner: Learner) -> Progress:
+def _worker_env(spec: SimSpec, envs: int, seed: int, workers: int) -> BatchedWarehouseEnv:
+    """The batched env of one collector; a worker process runs its policy on one thread
+    (torch's default, one per core, oversubscribes the cores the workers share)."""
+    if workers > 1:
+        torch.set_num_threads(1)
+    return BatchedWarehouseEnv(spec, envs, seed)
+
+
+def _resume(cfg: TrainConfig, learner: Learner) -> tuple[Progress, list[dict[str, float]]]:
     ckpt = load_checkpoint(cfg.resume)
     model_cfg = _plain_model(cfg)
     if ckpt["model_config"] != model_cfg:
@@ -263,7 +278,7 @@ def _resume(cfg: TrainConfig, learner: Learner) -> Progress:
         int(ckpt["frames"]), int(ckpt["iteration"]), float(ckpt.get("best_ttd", float("inf")))
     )
     torch.manual_seed(cfg.seed + progress.iteration)
-    return progress
+    return progress, list(ckpt.get("history", []))
 
 
 def _plain_model(cfg: TrainConfig) -> dict[str, int]:
@@ -286,8 +301,9 @@ class Checkpoints:
         self.cfg, self.learner, self.progress = cfg, learner, progress
         self.last, self.best = folder / "last.pt", folder / "best.pt"
 
-    def save(self, row: dict[str, float]) -> None:
-        """Write ``last.pt`` (and ``best.pt``) with the evaluation ``row``."""
+    def save(self, row: dict[str, float], history: list[dict[str, float]]) -> None:
+        """Write ``last.pt`` (and ``best.pt``) with the evaluation ``row`` and every
+        evaluation so far (so a resumed run draws its whole curve)."""
         learner, progress = self.learner, self.progress
         payload = {
             "model": {
@@ -301,6 +317,7 @@ class Checkpoints:
             "iteration": progress.iteration,
             "best_ttd": progress.best_ttd,
             "eval": row,
+            "history": history,
         }
         save_checkpoint(self.last, payload)
         if row["ttd"] <= progress.best_ttd:
@@ -314,14 +331,17 @@ class Evaluator:
     Args:
         spec: The simulator spec.
         seeds: Selection seeds (never the evaluation seeds 0-19).
+        history: Evaluations of the run so far (on resume).
     """
 
-    def __init__(self, spec: SimSpec, seeds: list[int]) -> None:
+    def __init__(
+        self, spec: SimSpec, seeds: list[int], history: list[dict[str, float]] | None = None
+    ) -> None:
         self.seeds = seeds
         self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0)
         mpdm = evaluate(build_sim(spec), {"mpdm": MPDM()}, seeds)["mpdm"]["ttd"]
         self.mpdm_ttd = float(np.mean(mpdm))
-        self.history: list[dict[str, float]] = []
+        self.history: list[dict[str, float]] = list(history or [])
 
     def run(self, net: RTAWActor, progress: Progress, wall_s: float) -> dict[str, float]:
         """Evaluate ``net``, update ``progress.best_ttd`` and return the logged row."""

@@ -20,9 +20,16 @@ POC_ENV = {
 POC_LAYOUT = {"name": "open", "width": 10, "height": 10}
 
 
+#: The learning tests were calibrated with the paper's PPO table and 16 envs per worker;
+#: they keep those settings unless a test overrides them.
+SMALL_RUN = {"algo": "ppo_paper", "collector.envs_per_worker": "16"}
+
+
 def compose_train(overrides: list[str]) -> TrainConfig:
     """The typed rtaw-train config with ``overrides`` (progress bar off)."""
-    return to_typed(compose("train", ["progress=false", *overrides]))
+    given = {o.split("=", 1)[0] for o in overrides}
+    small = [f"{k}={v}" for k, v in SMALL_RUN.items() if k not in given]
+    return to_typed(compose("train", ["progress=false", *small, *overrides]))
 
 
 @pytest.fixture
