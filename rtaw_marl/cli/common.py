@@ -18,10 +18,9 @@ from rtaw_marl.config import CONF_DIR, config_error, register_configs, to_typed
 from rtaw_marl.errors import ConfigError, RtawError
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["exit_on_user_error", "hydra_entry", "policies_from_cfg", "sim_spec", "typed"]
+__all__ = ["exit_on_user_error", "hydra_entry", "policies_from_cfg", "typed"]
 
 
 def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable[[], None]:
@@ -72,11 +71,6 @@ def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig]
 def typed(cfg: DictConfig | Any) -> Any:
     """The typed dataclass of a composed config (a typed config passes through)."""
     return to_typed(cfg) if isinstance(cfg, DictConfig) else cfg
-
-
-def sim_spec(cfg: Any) -> SimSpec:
-    """The simulator spec of a typed run config (its four sim groups)."""
-    return SimSpec.of(cfg.env, cfg.layout, cfg.navigator, cfg.tasks)
 
 
 def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:

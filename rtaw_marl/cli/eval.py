@@ -22,7 +22,6 @@ from rtaw_marl.cli.common import (
     exit_on_user_error,
     hydra_entry,
     policies_from_cfg,
-    sim_spec,
     typed,
 )
 from rtaw_marl.config import as_plain
@@ -47,7 +46,7 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
         raise ConfigError("policy must name at least one policy")
     if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
         raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
-    sim = build_sim(sim_spec(cfg))
+    sim = build_sim(cfg.sim_spec())
     print(f"layout {sim.layout.describe()}")
     policies = policies_from_cfg(cfg, names, sim)
     # Checked before the episodes run, so a typo does not cost a whole evaluation.

@@ -17,7 +17,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, sim_spec, typed
+from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, typed
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import RenderConfig
 from rtaw_marl.evaluation.evaluate import run_episode
@@ -39,7 +39,7 @@ def run(cfg: DictConfig | RenderConfig) -> Path:
             f"navigator={cfg.navigator.name} moves robots independently (they pass through "
             "each other); render with navigator=sipp or navigator=cbs"
         )
-    sim = build_sim(sim_spec(cfg))
+    sim = build_sim(cfg.sim_spec())
     (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
     metrics = run_episode(sim, policy, int(cfg.seed))
     schedule = sim.schedule()

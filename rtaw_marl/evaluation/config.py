@@ -7,19 +7,16 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtaw_marl.policies.config import BaselinesConfig
+from rtaw_marl.sim.builder import SimGroups
 
 __all__ = ["EvalConfig", "RenderConfig"]
 
 
 @dataclass(kw_only=True)
-class EvalConfig:
+class EvalConfig(SimGroups):
     """An ``rtaw-eval`` run.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
-        layout: A layout option (:mod:`rtaw_marl.sim.options`).
-        navigator: A navigator option.
-        tasks: A task-stream option.
         policy: Policies to evaluate, by name (one or a list): ``mpdm``, ``rbts``,
             ``random``, ``lookahead``, ``hungarian``, ``hindsight`` (a reference that
             knows the future), ``checkpoint`` (trained files) and ``rtaw`` (shipped
@@ -37,10 +34,6 @@ class EvalConfig:
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
     """
 
-    env: Any
-    layout: Any
-    navigator: Any
-    tasks: Any
     policy: Any = field(default_factory=lambda: ["mpdm", "rbts", "random"])
     checkpoint: Any = None
     pretrained: Any = None
@@ -54,14 +47,10 @@ class EvalConfig:
 
 
 @dataclass(kw_only=True)
-class RenderConfig:
+class RenderConfig(SimGroups):
     """An ``rtaw-render`` run: one episode of one policy, saved as an animated GIF.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
-        layout: A layout option.
-        navigator: A collision-aware navigator option (``sipp`` or ``cbs``).
-        tasks: A task-stream option.
         policy: One policy: ``mpdm``, ``rbts``, ``random``, ``checkpoint`` or ``rtaw``.
         checkpoint: The checkpoint path when ``policy=checkpoint``.
         pretrained: The shipped policy name when ``policy=rtaw``.
@@ -77,10 +66,6 @@ class RenderConfig:
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
     """
 
-    env: Any
-    layout: Any
-    navigator: Any
-    tasks: Any
     policy: str = "mpdm"
     checkpoint: str | None = None
     pretrained: str | None = None

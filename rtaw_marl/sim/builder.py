@@ -33,7 +33,7 @@ from rtaw_marl.sim.options import (
 )
 from rtaw_marl.sim.tasks import TaskStream
 
-__all__ = ["SimFactory", "SimSpec", "build_sim", "sim_config"]
+__all__ = ["SimFactory", "SimGroups", "SimSpec", "build_sim", "sim_config"]
 
 
 @dataclass(kw_only=True)
@@ -76,6 +76,28 @@ class SimSpec:
     def as_dict(self) -> dict[str, Any]:
         """Plain values (lists, not tuples) for results and checkpoints."""
         return _plain(dataclasses.asdict(self))
+
+
+@dataclass(kw_only=True)
+class SimGroups:
+    """The four simulator groups of a run config (``rtaw-train``, ``rtaw-eval``,
+    ``rtaw-render``), filled by Hydra with typed options.
+
+    Attributes:
+        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
+        layout: A layout option (:mod:`rtaw_marl.sim.options`).
+        navigator: A navigator option.
+        tasks: A task-stream option.
+    """
+
+    env: Any
+    layout: Any
+    navigator: Any
+    tasks: Any
+
+    def sim_spec(self) -> SimSpec:
+        """The typed spec the one builder takes."""
+        return SimSpec.of(self.env, self.layout, self.navigator, self.tasks)
 
 
 class SimFactory:

@@ -7,6 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from rtaw_marl.sim.builder import SimGroups
+
 __all__ = ["CollectorConfig", "PPOConfig", "TrainConfig", "TrainEvalConfig"]
 
 
@@ -79,14 +81,10 @@ class TrainEvalConfig:
 
 
 @dataclass(kw_only=True)
-class TrainConfig:
+class TrainConfig(SimGroups):
     """A whole ``rtaw-train`` run.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
-        layout: A layout option (:mod:`rtaw_marl.sim.options`).
-        navigator: A navigator option.
-        tasks: A task-stream option.
         model: A model option (:class:`~rtaw_marl.models.config.RTAWConfig`).
         algo: The PPO settings.
         seed: Seed of the whole run (networks, sampling, episodes).
@@ -101,10 +99,6 @@ class TrainConfig:
         interop: Train through TorchRL's PettingZooWrapper on the AEC env (small M).
     """
 
-    env: Any
-    layout: Any
-    navigator: Any
-    tasks: Any
     model: Any
     algo: PPOConfig = field(default_factory=PPOConfig)
     seed: int = 0

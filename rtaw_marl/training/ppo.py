@@ -112,7 +112,7 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         )
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(int(cfg.torch_threads))
-    spec = SimSpec.of(cfg.env, cfg.layout, cfg.navigator, cfg.tasks)
+    spec = cfg.sim_spec()
     keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
     learner = build_learner(cfg, keys)
     progress, history = _resume(cfg, learner) if cfg.resume else (Progress(), [])

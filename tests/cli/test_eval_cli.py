@@ -14,7 +14,7 @@ import pytest
 from omegaconf import DictConfig
 from scipy import stats as scipy_stats
 
-from rtaw_marl.cli.common import sim_spec, typed
+from rtaw_marl.cli.common import typed
 from rtaw_marl.cli.eval import run
 from rtaw_marl.config import CONF_DIR, compose
 
@@ -53,7 +53,7 @@ def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Pat
         overrides += ["env.queue_len=2", "layout=open"]
     cfg = _compose(overrides)
     assert cfg[group if group not in GLOBAL_GROUPS else "env"] is not None
-    sim = sim_spec(typed(cfg)).build()
+    sim = typed(cfg).sim_spec().build()
     sim.reset(0)
     assert not sim.done
 
