@@ -4,6 +4,7 @@ Usage::
 
     python experiments/train_pretrained.py                 # every entry of the registry
     python experiments/train_pretrained.py A_astar_m10     # selected entries
+    python experiments/train_pretrained.py --jobs 2 --plus # every RTAW+ entry, 2 at a time
 
 Each entry of ``rtaw_marl/policies/pretrained/registry.py`` names its ``rtaw-train`` overrides;
 this script runs exactly that command, then writes the best checkpoint, without the
@@ -13,36 +14,62 @@ the command line that trained it.
 
 from __future__ import annotations
 
+import argparse
 import shutil
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, train_command
 
 ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = ROOT / "rtaw_marl" / "policies" / "pretrained"
 
 
-def main(names: list[str]) -> int:
-    for name in names or list(PRETRAINED):
-        run_dir = ROOT / "runs" / "pretrained" / name
-        shutil.rmtree(run_dir, ignore_errors=True)
-        cmd = train_command(name, run_dir)
-        print(" ".join(cmd), flush=True)
-        subprocess.run(cmd, check=True, cwd=ROOT)
-        ckpt = load_checkpoint(run_dir / "checkpoints" / "best.pt")
-        ckpt.pop("optimizer", None)
-        ckpt["command"] = cmd
-        out = ROOT / "rtaw_marl" / "pretrained" / f"{name}.pt"
-        payload = {k: v for k, v in ckpt.items() if k not in ("format", "features", "versions")}
-        save_checkpoint(out, payload)
-        curve = ROOT / "docs" / "img" / f"training_{name}.png"
-        curve.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(run_dir / "training_curve.png", curve)
-        print(f"{name}: best eval TTD {ckpt['eval']['ttd']:.1f} -> {out}", flush=True)
+def train_one(name: str) -> str:
+    """Train entry ``name`` from scratch and ship its best checkpoint; returns a summary."""
+    run_dir = ROOT / "runs" / "pretrained" / name
+    shutil.rmtree(run_dir, ignore_errors=True)
+    cmd = train_command(name, run_dir)
+    print(" ".join(cmd), flush=True)
+    log = ROOT / "runs" / "pretrained" / f"{name}.log"
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with log.open("w") as fh:
+        subprocess.run(cmd, check=True, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT)
+    ckpt = load_checkpoint(run_dir / "checkpoints" / "best.pt")
+    ckpt.pop("optimizer", None)
+    ckpt["command"] = cmd
+    payload = {k: v for k, v in ckpt.items() if k not in ("format", "features", "versions")}
+    out = save_checkpoint(SHIPPED / f"{name}.pt", payload)
+    curve = ROOT / "docs" / "img" / f"training_{name}.png"
+    curve.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(run_dir / "training_curve.png", curve)
+    row = ckpt["eval"]
+    return (
+        f"{name}: best selection TTD {row['ttd']:.1f} (MPDM {row['mpdm_ttd']:.1f}, "
+        f"lookahead {row.get('lookahead_ttd', float('nan')):.1f}) at {ckpt['frames']} frames "
+        f"-> {out}"
+    )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*", help="registry entries (default: all)")
+    parser.add_argument("--jobs", type=int, default=1, help="training runs at once")
+    parser.add_argument("--plus", action="store_true", help="only the RTAW+ entries")
+    parser.add_argument("--paper", action="store_true", help="only the paper-network entries")
+    args = parser.parse_args()
+    names = args.names or [
+        n for n in PRETRAINED
+        if not (args.plus and not n.endswith("_plus")) and not (args.paper and n.endswith("_plus"))
+    ]  # fmt: skip
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        for line in pool.map(train_one, names):
+            print(line, flush=True)
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main())

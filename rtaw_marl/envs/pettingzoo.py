@@ -14,7 +14,7 @@ task's pickup (the *travel delay*).
 | Number of agents   | `num_robots` (M)                                        |
 | Action shape       | `()`                                                    |
 | Action values      | `Discrete(queue_len)`                                   |
-| Observation shape  | dict: robots `[M, 3]`, tasks `[N, 6]`, agent `[3]`, action_mask `[N]` |
+| Observation shape  | dict of arrays (see Observation below)                  |
 | Observation values | float32, roughly in `[0, 1]` (see scales)               |
 
 ## Agents and turn order
@@ -40,6 +40,17 @@ share the scale); coordinates use `x` = column, `y` = row.
   task length (origin -> destination). Empty slots (possible at the end of a `drain`
   episode) are all zeros.
 * `agent` `[3]`: this robot's own row of `robots`.
+* `relations` `[N, 8]`: relational features of each slot from *this* robot's point of
+  view (read by `model=rtaw_plus`), all divided by `L`: its distance `k` to the origin,
+  the task length, the time the task has waited in the queue, the arrival of the three
+  fastest rivals minus `k`, a soft-min (temperature `0.05 L`) of the rivals' arrivals
+  minus `k`, and the distance from the task's destination to the nearest other queued
+  origin. A robot's *arrival* is its time until free plus the distance from the cell
+  where it will be free; *rivals* are the other robots. A missing rival or chain
+  partner counts as `2` (two layout scales away).
+* `rivals` `[N, 8, 4]`: per slot, the 8 rivals arriving first (sorted; ties: lowest
+  robot id), each `(arrival - k, time_until_free, distance) / L` and a validity flag
+  (0 for the padding rows when there are fewer than 9 robots).
 * `action_mask` `[N]` int8: 1 for the slots holding a task. The mask of any agent other
   than the selected one is all zeros.
 
@@ -93,7 +104,14 @@ from pettingzoo import AECEnv
 from pettingzoo.utils import wrappers
 
 from rtaw_marl import register_envs
-from rtaw_marl.envs.features import robot_features, task_features
+from rtaw_marl.envs.features import (
+    NUM_RIVALS,
+    RELATION_FEATURES,
+    RIVAL_FEATURES,
+    relational_features,
+    robot_features,
+    task_features,
+)
 from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
@@ -163,6 +181,9 @@ class raw_env(AECEnv):
                     0.0, np.array([[1, 1, 1, 1, inf, inf]] * n, np.float32), (n, 6)
                 ),
                 "agent": spaces.Box(0.0, np.array([1, 1, inf], np.float32), (3,)),
+                # Rival offsets are negative when a rival arrives first.
+                "relations": spaces.Box(-inf, inf, (n, len(RELATION_FEATURES)), np.float32),
+                "rivals": spaces.Box(-inf, inf, (n, NUM_RIVALS, len(RIVAL_FEATURES)), np.float32),
                 "action_mask": spaces.Box(0, 1, (n,), np.int8),
             }
         )
@@ -213,12 +234,18 @@ class raw_env(AECEnv):
             distance, mask = sim.robot_distances(), self._mask
         else:
             distance, mask = sim.robot_distances(robot), self._zero_mask.copy()
+        relations, rivals = relational_features(
+            self._all_dist, self._remaining, robot, sim.queue_length, self._waits,
+            self._chain, sim.queue_mask, self.scale,
+        )  # fmt: skip
         return {
             "robots": self._robot_rows,
             "tasks": task_features(
                 sim.queue_rows, sim.queue_length, distance, sim.queue_mask, self.scale
             ),
             "agent": self._robot_rows[robot].copy(),
+            "relations": relations,
+            "rivals": rivals,
             "action_mask": mask,
         }
 
@@ -229,6 +256,10 @@ class raw_env(AECEnv):
             return
         self._robot_rows = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, self.scale)
         self._mask = sim.queue_mask.astype(np.int8)
+        self._all_dist = sim.distance_matrix()
+        self._remaining = sim.robot_remaining()
+        self._waits = sim.queue_waits()
+        self._chain = sim.chain_distances()
         self._cache_decision = sim.decisions
 
     # ------------------------------------------------------------------ step

@@ -10,7 +10,8 @@ vectorised expression over shared ``[B, ...]`` state buffers (see
 Keys (batch size ``[B]``):
 
 * ``"robots"`` float32 ``[B, M, 3]``, ``"tasks"`` float32 ``[B, N, 6]``, ``"agent"``
-  float32 ``[B, 3]``, ``"action_mask"`` bool ``[B, N]``: exactly the PettingZoo env's
+  float32 ``[B, 3]``, ``"relations"`` float32 ``[B, N, 8]``, ``"rivals"`` float32
+  ``[B, N, K, 4]``, ``"action_mask"`` bool ``[B, N]``: exactly the PettingZoo env's
   observation of the free robot (same feature functions, bit-identical).
 * ``"action"`` int64 ``[B]``: the chosen slot.
 * ``("next", "reward")`` float32 ``[B, 1]``: minus the chosen task's TTD (or the
@@ -34,7 +35,15 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Binary, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from rtaw_marl.envs.features import OBSERVATION_KEYS, robot_features, task_features
+from rtaw_marl.envs.features import (
+    NUM_RIVALS,
+    OBSERVATION_KEYS,
+    RELATION_FEATURES,
+    RIVAL_FEATURES,
+    relational_features,
+    robot_features,
+    task_features,
+)
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimFactory, SimSpec
 from rtaw_marl.sim.config import SimBuffers
@@ -68,6 +77,9 @@ class BatchedWarehouseEnv(EnvBase):
         self._time = np.zeros(b, dtype=np.float64)
         self._robot = np.zeros(b, dtype=np.int64)
         self._dist = np.zeros((b, n), dtype=np.float64)
+        self._all_dist = np.zeros((b, m, n), dtype=np.float64)
+        self._chain = np.zeros((b, n, n), dtype=np.float64)
+        self._wait = np.zeros((b, n), dtype=np.float64)
         self.sims = [
             factory(
                 SimBuffers(
@@ -89,6 +101,8 @@ class BatchedWarehouseEnv(EnvBase):
             robots=Unbounded(shape=(b, m, 3), dtype=torch.float32),
             tasks=Unbounded(shape=(b, n, 6), dtype=torch.float32),
             agent=Unbounded(shape=(b, 3), dtype=torch.float32),
+            relations=Unbounded(shape=(b, n, len(RELATION_FEATURES)), dtype=torch.float32),
+            rivals=Unbounded(shape=(b, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=torch.float32),
             action_mask=Binary(n=n, shape=(b, n), dtype=torch.bool),
             shape=(b,),
         )
@@ -169,11 +183,18 @@ class BatchedWarehouseEnv(EnvBase):
         self._time[i] = sim.time
         self._robot[i] = sim.robot
         self._dist[i] = sim.robot_distances()
+        self._all_dist[i] = sim.distance_matrix()
+        self._chain[i] = sim.chain_distances()
+        self._wait[i] = sim.queue_waits()
 
     def _observation(self) -> TensorDict:
         robots = robot_features(self._robot_xy, self._free_at, self._time, self.scale)
         tasks = task_features(self._rows, self._length, self._dist, self._mask, self.scale)
         agent = robots[np.arange(self.num_envs), self._robot]
+        relations, rivals = relational_features(
+            self._all_dist, self._free_at - self._time[:, None], self._robot, self._length,
+            self._wait, self._chain, self._mask, self.scale,
+        )  # fmt: skip
         mask = torch.from_numpy(self._mask.copy())
         # A masked action spec makes random policies (and check_env_specs) pick valid slots.
         self._action_spec_unbatched.update_mask(mask)
@@ -182,6 +203,8 @@ class BatchedWarehouseEnv(EnvBase):
                 "robots": torch.from_numpy(robots),
                 "tasks": torch.from_numpy(tasks),
                 "agent": torch.from_numpy(agent),
+                "relations": torch.from_numpy(relations),
+                "rivals": torch.from_numpy(rivals),
                 "action_mask": mask,
             },
             batch_size=self.batch_size,

@@ -1,35 +1,39 @@
-"""TorchRL actor and critic modules around the RTAW networks, on explicit keys."""
+"""TorchRL actor and critic modules around the RTAW networks, on explicit keys.
+
+Each network names its inputs in ``in_keys`` (observation entries, the action mask
+last); the caller passes the tensordict key of each, which may be nested.
+"""
 
 from __future__ import annotations
 
 from tensordict.nn import TensorDictModule
 from torchrl.modules import MaskedCategorical, ProbabilisticActor, ValueOperator
 
-from rtaw_marl.envs.features import OBSERVATION_KEYS
-from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
+from rtaw_marl.models.checkpoint import Actor, Critic
 
-__all__ = ["OBSERVATION_KEYS", "make_actor", "make_critic"]
+__all__ = ["make_actor", "make_critic"]
 
 
-def make_actor(net: RTAWActor, keys: tuple = OBSERVATION_KEYS) -> ProbabilisticActor:
+def make_actor(net: Actor, keys: tuple | None = None) -> ProbabilisticActor:
     """A stochastic actor: logits -> ``MaskedCategorical`` over the queue slots.
 
     Args:
         net: The policy network.
-        keys: The observation keys in the order ``(robots, tasks, agent, action_mask)``;
+        keys: The tensordict key of each of ``net.in_keys`` (default: those names);
             nested keys are allowed (the PettingZoo interop route uses them).
 
     Returns:
         A module writing ``"logits"``, ``"action"`` and ``"action_log_prob"``.
     """
+    keys = tuple(net.in_keys) if keys is None else tuple(keys)
     # Outputs go next to the action mask: ("agents", ...) on the interop route.
-    prefix = keys[3][:-1] if isinstance(keys[3], tuple) else ()
+    prefix = keys[-1][:-1] if isinstance(keys[-1], tuple) else ()
     logits_key = (*prefix, "logits") if prefix else "logits"
     action_key = (*prefix, "action") if prefix else "action"
     module = TensorDictModule(net, in_keys=list(keys), out_keys=[logits_key])
     return ProbabilisticActor(
         module,
-        in_keys={"logits": logits_key, "mask": keys[3]},
+        in_keys={"logits": logits_key, "mask": keys[-1]},
         out_keys=[action_key],
         distribution_class=MaskedCategorical,
         return_log_prob=True,
@@ -37,9 +41,10 @@ def make_actor(net: RTAWActor, keys: tuple = OBSERVATION_KEYS) -> ProbabilisticA
     )
 
 
-def make_critic(net: RTAWCritic, keys: tuple = OBSERVATION_KEYS) -> ValueOperator:
+def make_critic(net: Critic, keys: tuple | None = None) -> ValueOperator:
     """A value module writing ``"state_value"`` (next to the observation keys)."""
+    keys = tuple(net.in_keys) if keys is None else tuple(keys)
     # Outputs go next to the action mask: ("agents", ...) on the interop route.
-    prefix = keys[3][:-1] if isinstance(keys[3], tuple) else ()
+    prefix = keys[-1][:-1] if isinstance(keys[-1], tuple) else ()
     out = (*prefix, "state_value") if prefix else "state_value"
     return ValueOperator(net, in_keys=list(keys), out_keys=[out])

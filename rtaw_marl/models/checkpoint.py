@@ -3,7 +3,7 @@
 A checkpoint is a ``torch.save`` dict:
 
 ``format``        ``"rtaw_marl.checkpoint/1"``
-``features``      the observation layout it was trained on (robot/task columns)
+``features``      the observation layout its model reads (columns per observation key)
 ``model``         ``{"actor": state_dict, "critic": state_dict}`` and ``model_config``
 ``optimizer``     the optimizer state
 ``config``        the resolved training config
@@ -31,10 +31,17 @@ import torch
 import torchrl
 
 import rtaw_marl
-from rtaw_marl.envs.features import ROBOT_FEATURES, TASK_FEATURES
+from rtaw_marl.envs.features import (
+    NUM_RIVALS,
+    RELATION_FEATURES,
+    RIVAL_FEATURES,
+    ROBOT_FEATURES,
+    TASK_FEATURES,
+)
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.models.config import RTAWConfig
+from rtaw_marl.models.config import MODELS, ModelConfig, RTAWConfig, RTAWPlusConfig
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
+from rtaw_marl.models.rtaw_plus import RTAWPlusActor, RTAWPlusCritic
 from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = [
@@ -42,11 +49,24 @@ __all__ = [
     "build_networks",
     "library_versions",
     "load_checkpoint",
+    "model_features",
+    "plain_model",
     "save_checkpoint",
 ]
 
 FORMAT = "rtaw_marl.checkpoint/1"
-FEATURES = {"robots": list(ROBOT_FEATURES), "tasks": list(TASK_FEATURES)}
+#: The observation columns each model reads; checked when a checkpoint is loaded.
+FEATURES = {
+    "rtaw": {"robots": list(ROBOT_FEATURES), "tasks": list(TASK_FEATURES)},
+    "rtaw_plus": {
+        "relations": list(RELATION_FEATURES),
+        "rivals": [*RIVAL_FEATURES, f"top_{NUM_RIVALS}"],
+        "robots": list(ROBOT_FEATURES),
+    },
+}
+
+Actor = RTAWActor | RTAWPlusActor
+Critic = RTAWCritic | RTAWPlusCritic
 
 
 def library_versions() -> dict[str, str]:
@@ -62,10 +82,11 @@ def library_versions() -> dict[str, str]:
 
 
 def save_checkpoint(path: str | Path, payload: dict[str, Any]) -> Path:
-    """Atomically write ``payload`` (plus format, features and versions) to ``path``."""
+    """Atomically write ``payload`` (plus format, features and versions) to ``path``;
+    ``payload["model_config"]`` names the model (:func:`plain_model`)."""
     full = {
         "format": FORMAT,
-        "features": FEATURES,
+        "features": model_features(payload["model_config"]),
         "versions": library_versions(),
         "command": sys.argv,
         **payload,
@@ -89,27 +110,60 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
         raise ConfigError(f"cannot read checkpoint {path}: {exc}") from exc
     if not isinstance(ckpt, dict) or ckpt.get("format") != FORMAT:
         raise ConfigError(f"{path} is not an rtaw_marl checkpoint (expected format {FORMAT})")
-    if ckpt.get("features") != FEATURES:
+    expected = model_features(ckpt.get("model_config", {}))
+    if ckpt.get("features") != expected:
         raise ConfigError(
             f"checkpoint {path} was trained on observation features {ckpt.get('features')}, "
-            f"this version produces {FEATURES}"
+            f"this version produces {expected}"
         )
     return ckpt
 
 
-def build_networks(model: RTAWConfig | Mapping[str, Any]) -> tuple[RTAWActor, RTAWCritic]:
+def plain_model(model: ModelConfig) -> dict[str, Any]:
+    """A model option as a checkpoint's ``model_config``.
+
+    ``rtaw`` configs store their sizes only (as since the first release, so that old
+    checkpoints compare equal on resume); every other model stores its ``name`` too.
+    """
+    out = dataclasses.asdict(model)
+    if out.get("name") == "rtaw":
+        out.pop("name")
+    return out
+
+
+def _typed_model(model: ModelConfig | Mapping[str, Any]) -> ModelConfig:
+    if isinstance(model, (RTAWConfig, RTAWPlusConfig)):
+        return model
+    name = model.get("name", "rtaw")
+    if name not in MODELS:
+        raise ConfigError(f"unknown model {name!r}; valid models: {', '.join(MODELS)}")
+    cls = MODELS[name]
+    allowed = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(set(model) - set(allowed))
+    if unknown:
+        raise ConfigError(f"unknown key model.{unknown[0]}; valid keys: {', '.join(allowed)}")
+    return cls(**model)
+
+
+def model_features(model: ModelConfig | Mapping[str, Any]) -> dict[str, list[str]]:
+    """The observation columns the model reads (stored in and checked against checkpoints)."""
+    return FEATURES[_typed_model(model).name]
+
+
+def build_networks(model: ModelConfig | Mapping[str, Any]) -> tuple[Actor, Critic]:
     """Fresh actor and critic networks for a model option (or a checkpoint's
-    ``model_config`` mapping).
+    ``model_config`` mapping; one without ``name`` is ``rtaw``).
 
     Raises:
-        ConfigError: A key is unknown (the message lists the valid ones) or invalid.
+        ConfigError: A key or model name is unknown (the message lists the valid ones),
+            or a value is invalid.
     """
-    if not isinstance(model, RTAWConfig):
-        allowed = [f.name for f in dataclasses.fields(RTAWConfig)]
-        unknown = sorted(set(model) - set(allowed))
-        if unknown:
-            raise ConfigError(f"unknown key model.{unknown[0]}; valid keys: {', '.join(allowed)}")
-        model = RTAWConfig(**model)
+    model = _typed_model(model)
+    if isinstance(model, RTAWPlusConfig):
+        return (
+            RTAWPlusActor(model.embed_dim, model.heads),
+            RTAWPlusCritic(model.embed_dim, model.heads, model.critic_hidden),
+        )
     robot_in, task_in = len(ROBOT_FEATURES), len(TASK_FEATURES)
     actor = RTAWActor(robot_in, task_in, model.embed_dim, model.head_dim)
     critic = RTAWCritic(robot_in, task_in, model.embed_dim, model.critic_hidden)

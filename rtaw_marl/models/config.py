@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["MODELS", "RTAWConfig"]
+__all__ = ["MODELS", "RIVAL_DIM", "ModelConfig", "RTAWConfig", "RTAWPlusConfig"]
+
+#: Width of RTAW+'s rival keys and values (fixed: the rival tokens dominate its cost).
+RIVAL_DIM = 16
 
 
 @dataclass(kw_only=True)
@@ -28,10 +31,51 @@ class RTAWConfig:
 
         if self.name != "rtaw":
             raise ConfigError(f"model.name must be 'rtaw' for these keys, got {self.name!r}")
-        for key in ("embed_dim", "head_dim", "critic_hidden"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"model.{key} must be an integer >= 1, got {value!r}")
+        _check_sizes(self, ("embed_dim", "head_dim", "critic_hidden"))
 
 
-MODELS: dict[str, type[RTAWConfig]] = {"rtaw": RTAWConfig}
+@dataclass(kw_only=True)
+class RTAWPlusConfig:
+    """RTAW+, the relational attention network (:mod:`rtaw_marl.models.rtaw_plus`).
+
+    Attributes:
+        name: The option's name.
+        embed_dim: Token size ``E`` of tasks and rivals.
+        heads: Attention heads (must divide ``embed_dim``).
+        critic_hidden: Hidden size of the critic's value head.
+    """
+
+    name: str = "rtaw_plus"
+    embed_dim: int = 32
+    heads: int = 4
+    critic_hidden: int = 64
+
+    def __post_init__(self) -> None:
+        from rtaw_marl.errors import ConfigError
+
+        if self.name != "rtaw_plus":
+            raise ConfigError(f"model.name must be 'rtaw_plus' for these keys, got {self.name!r}")
+        _check_sizes(self, ("embed_dim", "heads", "critic_hidden"))
+        for width in (self.embed_dim, RIVAL_DIM):
+            if width % self.heads:
+                raise ConfigError(
+                    f"model.heads={self.heads} must divide model.embed_dim={self.embed_dim} "
+                    f"and the rival width {RIVAL_DIM} (a multiple of it is needed)"
+                )
+
+
+def _check_sizes(config: object, keys: tuple[str, ...]) -> None:
+    from rtaw_marl.errors import ConfigError
+
+    for key in keys:
+        value = getattr(config, key)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ConfigError(f"model.{key} must be an integer >= 1, got {value!r}")
+
+
+ModelConfig = RTAWConfig | RTAWPlusConfig
+
+MODELS: dict[str, type[RTAWConfig] | type[RTAWPlusConfig]] = {
+    "rtaw": RTAWConfig,
+    "rtaw_plus": RTAWPlusConfig,
+}

@@ -90,6 +90,8 @@ class RTAWActor(nn.Module):
         head_dim: Hidden size of the per-task scoring layer (8 in the paper).
     """
 
+    in_keys = ("robots", "tasks", "agent", "action_mask")
+
     def __init__(self, robot_dim: int, task_dim: int, embed_dim: int, head_dim: int) -> None:
         super().__init__()
         self.encoder = RTAWEncoder(robot_dim, task_dim, embed_dim)
@@ -117,6 +119,8 @@ class RTAWCritic(nn.Module):
         embed_dim: Embedding size ``E``.
         hidden_dim: Hidden size of the value head.
     """
+
+    in_keys = ("robots", "tasks", "agent", "action_mask")
 
     def __init__(self, robot_dim: int, task_dim: int, embed_dim: int, hidden_dim: int) -> None:
         super().__init__()

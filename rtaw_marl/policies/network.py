@@ -4,12 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import torch
 
-from rtaw_marl.envs.features import robot_features, task_features
-from rtaw_marl.models.checkpoint import build_networks, load_checkpoint
-from rtaw_marl.models.rtaw import RTAWActor
+from rtaw_marl.envs.features import sim_observation
+from rtaw_marl.models.checkpoint import Actor, build_networks, load_checkpoint
 from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["SimNetworkPolicy", "load_policy"]
@@ -39,7 +37,7 @@ class SimNetworkPolicy:
         name: Label used in result tables.
     """
 
-    def __init__(self, net: RTAWActor, name: str = "rtaw") -> None:
+    def __init__(self, net: Actor, name: str = "rtaw") -> None:
         self.net = net.eval()
         self.name = name
 
@@ -49,16 +47,7 @@ class SimNetworkPolicy:
     @torch.no_grad()
     def act_sim(self, sim: WarehouseSim) -> int:
         """The slot with the largest logit among the non-empty ones."""
-        scale = sim.layout.scale
-        robots = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, scale)
-        tasks = task_features(
-            sim.queue_rows, sim.queue_length, sim.robot_distances(), sim.queue_mask, scale
-        )
-        mask = torch.from_numpy(sim.queue_mask.copy())
-        logits = self.net(
-            torch.from_numpy(robots),
-            torch.from_numpy(tasks),
-            torch.from_numpy(np.ascontiguousarray(robots[sim.robot])),
-            mask,
-        )
+        obs = sim_observation(sim, self.net.in_keys)
+        logits = self.net(*(torch.from_numpy(obs[key]) for key in self.net.in_keys))
+        mask = torch.from_numpy(obs["action_mask"])
         return int(torch.where(mask, logits, -torch.inf).argmax())

@@ -242,6 +242,16 @@ class WarehouseSim:
         """Distances ``float64 [M, N]`` from every robot's cell to each queued origin."""
         return self._slots.distances_from(self.robot_xy)
 
+    def chain_distances(self) -> np.ndarray:
+        """Distances ``float64 [N, N]`` from each queued destination (rows) to each queued
+        origin (columns): how well one task leads into another. Empty slots: meaningless."""
+        return self._slots.distances_from(self.queue_rows[:, 2:])
+
+    def queue_waits(self) -> np.ndarray:
+        """``float64 [N]`` time each queued task has waited in the queue (0 when empty)."""
+        arrival = self.task_arrival[np.maximum(self.queue_ids, 0)]
+        return np.where(self.queue_mask, self.time - arrival, 0.0)
+
     def queue_tasks(self) -> np.ndarray:
         """A copy of :attr:`queue_rows`: ``int64 [N, 4]``, zeros for empty slots."""
         return self.queue_rows.copy()

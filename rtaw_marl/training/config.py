@@ -9,7 +9,10 @@ from typing import Any
 
 from rtaw_marl.sim.builder import SimGroups
 
-__all__ = ["CollectorConfig", "PPOConfig", "TrainConfig", "TrainEvalConfig"]
+__all__ = ["CollectorConfig", "ImitationConfig", "PPOConfig", "TrainConfig", "TrainEvalConfig"]
+
+#: Rules an imitation warm start can learn from.
+TEACHERS = ("lookahead", "hindsight")
 
 
 @dataclass(kw_only=True)
@@ -81,6 +84,45 @@ class TrainEvalConfig:
 
 
 @dataclass(kw_only=True)
+class ImitationConfig:
+    """An optional warm start by imitation before PPO (``imitation.*``;
+    :mod:`rtaw_marl.training.imitation`).
+
+    Attributes:
+        teacher: ``lookahead`` or ``hindsight`` (the ``baselines`` defaults' horizons);
+            ``None``: no warm start.
+        frames: Teacher-labelled decisions in all rounds together (not counted in
+            ``frames``, which counts PPO's).
+        rounds: Round 0 follows the teacher; rounds 1.. follow the student (DAgger).
+        epochs: Passes over everything labelled so far after each round.
+        minibatch_size: Decisions per gradient step.
+        lr: Adam learning rate of the warm start.
+    """
+
+    teacher: str | None = None
+    frames: int = 131_072
+    rounds: int = 4
+    epochs: int = 4
+    minibatch_size: int = 1024
+    lr: float = 1.0e-3
+
+    def __post_init__(self) -> None:
+        from rtaw_marl.errors import ConfigError
+
+        if self.teacher is not None and self.teacher not in TEACHERS:
+            raise ConfigError(
+                f"imitation.teacher must be one of {', '.join(TEACHERS)} or null, "
+                f"got {self.teacher!r}"
+            )
+        for key in ("frames", "rounds", "epochs", "minibatch_size"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"imitation.{key} must be an integer >= 1, got {value!r}")
+        if not self.lr > 0:
+            raise ConfigError(f"imitation.lr must be > 0, got {self.lr!r}")
+
+
+@dataclass(kw_only=True)
 class TrainConfig(SimGroups):
     """A whole ``rtaw-train`` run.
 
@@ -92,6 +134,7 @@ class TrainConfig(SimGroups):
         torch_threads: torch intra-op threads (1 is fastest for this small network).
         collector: Collection settings.
         eval: Periodic greedy evaluation settings.
+        imitation: The optional warm start by imitation.
         logger: ``csv``, ``tensorboard`` or ``none``.
         resume: A checkpoint to continue from.
         output_dir: The run folder; ``None`` means the Hydra run folder.
@@ -106,6 +149,7 @@ class TrainConfig(SimGroups):
     torch_threads: int = 1
     collector: CollectorConfig = field(default_factory=CollectorConfig)
     eval: TrainEvalConfig = field(default_factory=TrainEvalConfig)
+    imitation: ImitationConfig = field(default_factory=ImitationConfig)
     logger: str = "csv"
     resume: str | None = None
     output_dir: str | None = None

@@ -26,9 +26,14 @@ __all__ = ["BATCHED_KEYS", "INTEROP_KEYS", "TrainKeys", "acting_reward", "make_i
 
 @dataclass(frozen=True)
 class TrainKeys:
-    """Every tensordict key the trainer reads or writes, spelled out."""
+    """Every tensordict key the trainer reads or writes, spelled out.
 
-    observation: tuple[NestedKey, NestedKey, NestedKey, NestedKey]
+    ``observation_root`` is where observation entries live (``()``: at the top level) and
+    ``action_mask`` the mask's own key; :meth:`observation` spells a network's inputs.
+    """
+
+    observation_root: tuple[str, ...]
+    action_mask: NestedKey
     action: NestedKey
     log_prob: NestedKey
     value: NestedKey
@@ -39,9 +44,19 @@ class TrainKeys:
     value_target: NestedKey
     loss_mask: NestedKey | None
 
+    def observation(self, names: tuple[str, ...]) -> tuple[NestedKey, ...]:
+        """The keys of observation entries ``names`` (a network's ``in_keys``)."""
+        return tuple(
+            self.action_mask
+            if name == "action_mask"
+            else ((*self.observation_root, name) if self.observation_root else name)
+            for name in names
+        )
+
 
 BATCHED_KEYS = TrainKeys(
-    observation=("robots", "tasks", "agent", "action_mask"),
+    observation_root=(),
+    action_mask="action_mask",
     action="action",
     log_prob="action_log_prob",
     value="state_value",
@@ -54,12 +69,8 @@ BATCHED_KEYS = TrainKeys(
 )
 
 INTEROP_KEYS = TrainKeys(
-    observation=(
-        ("agents", "observation", "robots"),
-        ("agents", "observation", "tasks"),
-        ("agents", "observation", "agent"),
-        ("agents", "action_mask"),
-    ),
+    observation_root=("agents", "observation"),
+    action_mask=("agents", "action_mask"),
     action=("agents", "action"),
     log_prob=("agents", "action_log_prob"),
     value=("agents", "state_value"),

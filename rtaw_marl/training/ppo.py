@@ -27,11 +27,18 @@ from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.models.actor_critic import make_actor, make_critic
-from rtaw_marl.models.checkpoint import build_networks, load_checkpoint, save_checkpoint
-from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
-from rtaw_marl.policies import MPDM
+from rtaw_marl.models.checkpoint import (
+    Actor,
+    Critic,
+    build_networks,
+    load_checkpoint,
+    plain_model,
+    save_checkpoint,
+)
+from rtaw_marl.policies import MPDM, make_baseline
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.training.config import PPOConfig, TrainConfig
+from rtaw_marl.training.imitation import imitate
 from rtaw_marl.training.interop import (
     BATCHED_KEYS,
     INTEROP_KEYS,
@@ -65,8 +72,8 @@ class TrainResult:
 class Learner:
     """The networks and what updates them."""
 
-    actor_net: RTAWActor
-    critic_net: RTAWCritic
+    actor_net: Actor
+    critic_net: Critic
     loss: ClipPPOLoss
     gae: GAE
     optim: torch.optim.Optimizer
@@ -117,15 +124,17 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     learner = build_learner(cfg, keys)
     progress, history = _resume(cfg, learner) if cfg.resume else (Progress(), [])
     evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history)
+    reward_scale = cfg.algo.reward_scale or 1.0 / evaluator.env.scale
+    logger = RunLogger(run_dir, cfg.logger)
+    if cfg.imitation.teacher is not None and progress.frames == 0:
+        _warm_start(cfg, spec, learner, logger, reward_scale)
     collector = build_collector(cfg, spec, learner, keys, progress)
     buffer = TensorDictReplayBuffer(
         storage=LazyTensorStorage(cfg.algo.frames_per_batch),
         sampler=SamplerWithoutReplacement(),
         batch_size=cfg.algo.minibatch_size,
     )
-    logger = RunLogger(run_dir, cfg.logger)
     saver = Checkpoints(cfg, run_dir / "checkpoints", learner, progress)
-    reward_scale = cfg.algo.reward_scale or 1.0 / evaluator.env.scale
     bar = tqdm(total=cfg.frames, initial=progress.frames, unit="fr", disable=not cfg.progress)
     start = time.perf_counter()
 
@@ -174,6 +183,20 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     )  # fmt: skip
 
 
+def _warm_start(
+    cfg: TrainConfig, spec: SimSpec, learner: Learner, logger: RunLogger, reward_scale: float
+) -> None:
+    """Imitation rounds before PPO (their own episode seeds), logged as ``imitation/*``."""
+    rows = imitate(
+        cfg.imitation, spec, learner.actor_net, learner.critic_net,
+        num_envs=cfg.collector.envs_per_worker, seed=cfg.seed * 7919 + 104_729,
+        gamma=cfg.algo.gamma, reward_scale=reward_scale,
+    )  # fmt: skip
+    for row in rows:
+        logger.log({f"imitation/{k}": v for k, v in row.items() if k != "decisions"},
+                   row["decisions"])  # fmt: skip
+
+
 # --------------------------------------------------------------------------- building
 def _check(cfg: TrainConfig) -> None:
     algo = cfg.algo
@@ -198,8 +221,8 @@ def build_learner(cfg: TrainConfig, keys: TrainKeys) -> Learner:
     """Actor and critic networks, the ClipPPO loss on explicit keys, GAE and Adam."""
     algo = cfg.algo
     actor_net, critic_net = build_networks(cfg.model)
-    actor = make_actor(actor_net, keys.observation)
-    critic = make_critic(critic_net, keys.observation)
+    actor = make_actor(actor_net, keys.observation(actor_net.in_keys))
+    critic = make_critic(critic_net, keys.observation(critic_net.in_keys))
     loss = ClipPPOLoss(
         actor,
         critic,
@@ -281,10 +304,8 @@ def _resume(cfg: TrainConfig, learner: Learner) -> tuple[Progress, list[dict[str
     return progress, list(ckpt.get("history", []))
 
 
-def _plain_model(cfg: TrainConfig) -> dict[str, int]:
-    model = as_plain(cfg.model)
-    model.pop("name", None)  # checkpoints since the first release store the sizes only
-    return model
+def _plain_model(cfg: TrainConfig) -> dict[str, int | str]:
+    return plain_model(cfg.model)
 
 
 class Checkpoints:
@@ -339,11 +360,14 @@ class Evaluator:
     ) -> None:
         self.seeds = seeds
         self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0)
-        mpdm = evaluate(build_sim(spec), {"mpdm": MPDM()}, seeds)["mpdm"]["ttd"]
-        self.mpdm_ttd = float(np.mean(mpdm))
+        rules = {"mpdm": MPDM(), "lookahead": make_baseline("lookahead")}
+        ttd = {name: r["ttd"] for name, r in evaluate(build_sim(spec), rules, seeds).items()}
+        self.mpdm_ttd = float(np.mean(ttd["mpdm"]))
+        # The strongest online rule, so that every curve shows the bar to clear.
+        self.lookahead_ttd = float(np.mean(ttd["lookahead"]))
         self.history: list[dict[str, float]] = list(history or [])
 
-    def run(self, net: RTAWActor, progress: Progress, wall_s: float) -> dict[str, float]:
+    def run(self, net: Actor, progress: Progress, wall_s: float) -> dict[str, float]:
         """Evaluate ``net``, update ``progress.best_ttd`` and return the logged row."""
         ttd = float(np.mean(greedy_ttd(net, self.env, self.seeds)))
         progress.best_ttd = min(progress.best_ttd, ttd)
@@ -351,6 +375,7 @@ class Evaluator:
             "frames": progress.frames,
             "ttd": ttd,
             "mpdm_ttd": self.mpdm_ttd,
+            "lookahead_ttd": self.lookahead_ttd,
             "improvement_pct": 100.0 * (self.mpdm_ttd - ttd) / self.mpdm_ttd,
             "wall_s": wall_s,
         }
@@ -359,7 +384,7 @@ class Evaluator:
 
 
 @torch.no_grad()
-def greedy_ttd(net: RTAWActor, env: BatchedWarehouseEnv, seeds: list[int]) -> list[float]:
+def greedy_ttd(net: Actor, env: BatchedWarehouseEnv, seeds: list[int]) -> list[float]:
     """Total TTD of greedy (argmax) episodes, one per seed, run in lockstep.
 
     Args:
@@ -370,7 +395,7 @@ def greedy_ttd(net: RTAWActor, env: BatchedWarehouseEnv, seeds: list[int]) -> li
     td = env.reset_to(seeds)
     while True:
         mask = td["action_mask"]
-        logits = net(td["robots"], td["tasks"], td["agent"], mask)
+        logits = net(*(td[key] for key in net.in_keys))
         td["action"] = logits.masked_fill(~mask, -torch.inf).argmax(-1)
         td = env.step(td)["next"]
         # Every simulator takes num_tasks decisions, so all finish on the same step.

@@ -295,10 +295,14 @@ def test_observation_shapes_dtypes_and_space() -> None:
     env = warehouse_v0.env(num_robots=m, queue_len=n, num_tasks=20)
     env.reset(seed=0)
     space = env.observation_space("robot_0")
-    assert set(space.spaces) == {"robots", "tasks", "agent", "action_mask"}
+    keys = {"robots", "tasks", "agent", "relations", "rivals", "action_mask"}
+    assert set(space.spaces) == keys
     for agent in env.agents:
         obs = env.observe(agent)
-        assert set(obs) == {"robots", "tasks", "agent", "action_mask"}
+        assert set(obs) == keys
+        assert obs["relations"].shape == (n, 8)
+        assert obs["rivals"].shape == (n, 8, 4)
+        assert obs["relations"].dtype == obs["rivals"].dtype == np.float32
         assert obs["robots"].shape == (m, 3)
         assert obs["robots"].dtype == np.float32
         assert obs["tasks"].shape == (n, 6)

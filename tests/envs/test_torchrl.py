@@ -55,6 +55,8 @@ def test_same_trajectory_as_aec_env(layout, navigator: str, tasks: str, mode: st
             np.testing.assert_array_equal(obs["robots"], td["robots"][b].numpy())
             np.testing.assert_array_equal(obs["tasks"], td["tasks"][b].numpy())
             np.testing.assert_array_equal(obs["agent"], td["agent"][b].numpy())
+            np.testing.assert_array_equal(obs["relations"], td["relations"][b].numpy())
+            np.testing.assert_array_equal(obs["rivals"], td["rivals"][b].numpy())
             np.testing.assert_array_equal(obs["action_mask"].astype(bool), td["action_mask"][b])
             actions.append(int(rng.choice(np.flatnonzero(obs["action_mask"]))))
         td["action"] = torch.tensor(actions)

@@ -1,0 +1,174 @@
+"""A warm start by imitation: behaviour cloning of a rule, then DAgger, before PPO.
+
+Round 0 follows the teacher (``lookahead`` or ``hindsight``) on the batched simulators
+and records the policy's observations with the teacher's choice; each later round lets
+the *student* (the actor, greedy) drive, so the states are the student's own, still
+labelled by the teacher (DAgger with beta = 0 after the first round). After every round
+the actor is fitted by cross-entropy on everything labelled so far. The critic is fitted
+meanwhile to discounted returns of the student's rounds, so that PPO starts with a
+critic that knows the warm-started policy's values.
+
+The teacher acts on the simulators themselves (``act_sim``): ``hindsight`` sees the real
+future, which no online policy can; imitating it teaches the choices that pay off on
+average given what the observation shows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from tensordict import TensorDict
+
+from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
+from rtaw_marl.models.checkpoint import Actor, Critic
+from rtaw_marl.policies import make_baseline
+from rtaw_marl.policies.config import BaselinesConfig
+from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.training.config import ImitationConfig
+
+__all__ = ["imitate"]
+
+
+@dataclass
+class _Round:
+    """One round's labelled decisions ``[T, B]`` and the critic's targets."""
+
+    observations: TensorDict
+    labels: torch.Tensor
+    returns: torch.Tensor | None
+
+
+def imitate(
+    cfg: ImitationConfig,
+    spec: SimSpec,
+    actor: Actor,
+    critic: Critic,
+    *,
+    num_envs: int,
+    seed: int,
+    gamma: float,
+    reward_scale: float,
+) -> list[dict[str, float]]:
+    """Warm-start ``actor`` (and ``critic``) in place; one row of figures per round.
+
+    Args:
+        cfg: The imitation settings (``cfg.teacher`` must be set).
+        spec: The training simulator spec.
+        actor: The policy network to fit.
+        critic: The value network to fit to the student's returns.
+        num_envs: Simulators stepped together.
+        seed: Seed of the episodes (kept apart from PPO's and the evaluation's).
+        gamma: PPO's discount, for the critic's targets.
+        reward_scale: PPO's reward scale, for the critic's targets.
+
+    Returns:
+        Per round: ``round``, ``decisions`` labelled so far, ``agreement`` (how often the
+        student already chose the teacher's task in the states it drove into), the
+        fitted ``accuracy`` and ``loss``.
+    """
+    teacher = make_baseline(cfg.teacher, params=BaselinesConfig())
+    env = BatchedWarehouseEnv(spec, num_envs, seed=seed)
+    steps = max(1, cfg.frames // (cfg.rounds * num_envs))
+    keys = tuple(dict.fromkeys((*actor.in_keys, *critic.in_keys)))
+    optim = torch.optim.Adam([*actor.parameters(), *critic.parameters()], lr=cfg.lr)
+    rounds: list[_Round] = []
+    rows = []
+    for r in range(cfg.rounds):
+        data, agreement = _collect(env, teacher, actor, keys, steps, student=r > 0)
+        data.returns = _returns(data.observations, gamma, reward_scale) if r > 0 else None
+        rounds.append(data)
+        fit = _fit(cfg, actor, critic, optim, rounds)
+        rows.append({"round": r, "decisions": sum(x.labels.numel() for x in rounds),
+                     "agreement": agreement, **fit})  # fmt: skip
+    return rows
+
+
+@torch.no_grad()
+def _collect(
+    env: BatchedWarehouseEnv,
+    teacher: object,
+    actor: Actor,
+    keys: tuple[str, ...],
+    steps: int,
+    *,
+    student: bool,
+) -> tuple[_Round, float]:
+    """``steps`` decisions of every simulator, driven by the teacher or the student."""
+    td = env.reset()
+    frames, labels, agree = [], [], []
+    for _ in range(steps):
+        label = torch.tensor([teacher.act_sim(sim) for sim in env.sims])
+        action = label
+        if student:
+            logits = actor(*(td[k] for k in actor.in_keys))
+            action = logits.masked_fill(~td["action_mask"], -torch.inf).argmax(-1)
+            agree.append((action == label).float().mean().item())
+        td["action"] = action
+        out = env.step(td)
+        frames.append(td.select(*keys, "action_mask", "action").set("next", out["next"].select(
+            "reward", "done")))  # fmt: skip
+        labels.append(label)
+        td = out["next"]
+        if bool(td["done"].any()):
+            td = env.reset()
+    data = _Round(torch.stack(frames), torch.stack(labels), None)
+    return data, float(np.mean(agree)) if agree else float("nan")
+
+
+def _returns(frames: TensorDict, gamma: float, reward_scale: float) -> torch.Tensor:
+    """Discounted returns ``[T, B]`` within the collected stretch; NaN for the last
+    ``1 / (1 - gamma)`` steps, whose returns the stretch cuts short."""
+    reward = frames["next", "reward"].squeeze(-1) * reward_scale
+    done = frames["next", "done"].squeeze(-1).to(reward.dtype)
+    out = torch.zeros_like(reward)
+    running = torch.zeros_like(reward[0])
+    for t in range(reward.shape[0] - 1, -1, -1):
+        running = reward[t] + gamma * (1.0 - done[t]) * running
+        out[t] = running
+    out[max(0, reward.shape[0] - round(1.0 / (1.0 - gamma))) :] = torch.nan
+    return out
+
+
+def _fit(
+    cfg: ImitationConfig,
+    actor: Actor,
+    critic: Critic,
+    optim: torch.optim.Optimizer,
+    rounds: list[_Round],
+) -> dict[str, float]:
+    """Epochs of minibatches over every labelled decision so far."""
+    obs = torch.cat([r.observations.reshape(-1) for r in rounds])
+    labels = torch.cat([r.labels.reshape(-1) for r in rounds])
+    returns = torch.cat(
+        [
+            r.returns.reshape(-1)
+            if r.returns is not None
+            else torch.full_like(r.labels, torch.nan, dtype=torch.float32).reshape(-1)
+            for r in rounds
+        ]
+    )
+    has_return = ~returns.isnan()
+    gen = torch.Generator().manual_seed(len(rounds))
+    total = hits = 0
+    loss_sum = 0.0
+    for _ in range(cfg.epochs):
+        for idx in torch.randperm(len(labels), generator=gen).split(cfg.minibatch_size):
+            batch = obs[idx]
+            mask = batch["action_mask"]
+            logits = actor(*(batch[k] for k in actor.in_keys)).masked_fill(~mask, -1e9)
+            loss = torch.nn.functional.cross_entropy(logits, labels[idx])
+            valued = has_return[idx]
+            if valued.any():
+                value = critic(*(batch[k] for k in critic.in_keys)).squeeze(-1)
+                loss = loss + torch.nn.functional.smooth_l1_loss(
+                    value[valued], returns[idx][valued]
+                )
+            optim.zero_grad()
+            loss.backward()
+            optim.step()
+            loss_sum += loss.item() * len(idx)
+            hits += int((logits.argmax(-1) == labels[idx]).sum())
+            total += len(idx)
+    return {"accuracy": hits / max(total, 1), "loss": loss_sum / max(total, 1)}

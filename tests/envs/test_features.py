@@ -1,0 +1,76 @@
+"""The relational features (``relations``, ``rivals``) against a plain-Python oracle."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rtaw_marl import warehouse_v0
+from rtaw_marl.envs.features import MISSING, NUM_RIVALS, SOFTMIN_TEMPERATURE
+from tests.envs.test_pettingzoo import first_valid, is_done, oracle_distance
+
+
+def _oracle(sim, robot: int, navigator: str) -> tuple[np.ndarray, np.ndarray]:
+    """Relations and rivals of ``robot``'s view, one task and one robot at a time."""
+    scale = sim.layout.scale
+    n, m = sim.queue_len, sim.num_robots
+    relations = np.zeros((n, 8))
+    rivals = np.zeros((n, NUM_RIVALS, 4))
+    for i in range(n):
+        if not sim.queue_mask[i]:
+            continue
+        ox, oy, dx, dy = sim.tasks[sim.queue_ids[i]]
+        arrival = {}
+        for j in range(m):
+            wait = max(sim.robot_free_at[j] - sim.time, 0.0)
+            dist = float(oracle_distance(navigator, sim.robot_xy[j], np.array([[ox, oy]]))[0])
+            arrival[j] = (wait + dist, wait, dist)
+        own = arrival[robot][0]
+        others = sorted((arrival[j][0] - own, j) for j in range(m) if j != robot)
+        deltas = [d for d, _ in others]
+        top = (deltas + [MISSING * scale] * 3)[:3]
+        t = SOFTMIN_TEMPERATURE * scale
+        near = deltas[:NUM_RIVALS]
+        softmin = -t * math.log(sum(math.exp(-d / t) for d in near)) if near else MISSING * scale
+        chain = [
+            float(
+                oracle_distance(navigator, np.array([dx, dy]), sim.tasks[[sim.queue_ids[k]], :2])[0]
+            )
+            for k in range(n)
+            if k != i and sim.queue_mask[k]
+        ]
+        wait_q = sim.time - sim.task_arrival[sim.queue_ids[i]]
+        relations[i] = [own, sim.queue_length[i], wait_q, *top, softmin,
+                        min(chain) if chain else MISSING * scale]  # fmt: skip
+        relations[i] /= scale
+        for r, (d, j) in enumerate(others[:NUM_RIVALS]):
+            rivals[i, r] = [d / scale, arrival[j][1] / scale, arrival[j][2] / scale, 1.0]
+    return relations, rivals
+
+
+@pytest.mark.parametrize(("navigator", "robots"), [("astar", 5), ("direct", 12), ("astar", 1)])
+def test_relational_features_match_oracle(navigator: str, robots: int) -> None:
+    """Every agent's view at every decision of a drain episode (empty slots at the end)."""
+    env = warehouse_v0.env(
+        num_robots=robots,
+        queue_len=4,
+        num_tasks=20,
+        layout={"name": "open", "width": 17, "height": 11},
+        navigator=navigator,
+        tasks="random",
+    )
+    env.reset(seed=3)
+    sim = env.unwrapped.sim
+    checked = 0
+    while not is_done(env):
+        for i, agent in enumerate(env.agents):
+            obs = env.observe(agent)
+            relations, rivals = _oracle(sim, i, navigator)
+            np.testing.assert_allclose(obs["relations"], relations, rtol=1e-5, atol=1e-5)
+            np.testing.assert_allclose(obs["rivals"], rivals, rtol=1e-5, atol=1e-5)
+            checked += 1
+        obs, *_ = env.last()
+        env.step(first_valid(obs))
+    assert checked == 20 * robots
