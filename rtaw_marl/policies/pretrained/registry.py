@@ -17,6 +17,8 @@ __all__ = ["PRETRAINED", "SCENARIOS", "pretrained_path", "train_command"]
 
 #: The training scenario of each policy: layout, navigator, tasks and robot count.
 SCENARIOS: dict[str, list[str]] = {
+    # The default scenario (60x60 shelves, A*, designated tasks): the demo's.
+    "shelves_astar_m10": ["layout=shelves", "navigator=astar", "env.num_robots=10"],
     "open60_direct_m10": ["layout=open", "navigator=direct", "env.num_robots=10"],
     **{f"{p}_astar_m10": [f"layout={p}", "navigator=astar", "env.num_robots=10"] for p in "ABCDE"},
     "open60_direct_m100": ["layout=open", "navigator=direct", "env.num_robots=100"],
