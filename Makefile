@@ -15,13 +15,15 @@ $(STAMP): pyproject.toml
 
 DEMO_RUN := runs/demo
 
-# Train RTAW briefly (the fast default PPO), then compare it with MPDM, RBTS and lookahead.
+# Train RTAW+ briefly (a lookahead warm start, then PPO), then compare it and the shipped
+# RTAW+ policy of the default scenario with MPDM, RBTS and lookahead on 20 evaluation seeds.
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
-	$(BIN)/rtaw-train frames=204800 eval.every_frames=40960 output_dir=$(DEMO_RUN)
-	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,checkpoint] \
-		checkpoint=$(DEMO_RUN)/checkpoints/best.pt seeds=[0,1,2,3,4,5,6,7,8,9] \
-		output=$(DEMO_RUN)/results.json
+	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
+		frames=40960 eval.every_frames=20480 output_dir=$(DEMO_RUN)
+	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,rtaw,checkpoint] \
+		pretrained=shelves_astar_m10_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
+		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
 
 test: $(STAMP)
 	$(BIN)/ruff check rtaw_marl tests experiments

@@ -79,7 +79,7 @@ ROWS = [
      {10: "open60_direct_m10", 100: "open60_direct_m100"}),
     *[
         (f"A* layout {p}", {"name": "preset", "preset": p, "width": 60, "height": 60}, "astar",
-         {10: f"{p}_astar_m10", 100: f"{p}_astar_m10"})
+         {10: f"{p}_astar_m10", 100: f"{p}_astar_m100"})
         for p in "ABCDE"
     ],
 ]  # fmt: skip

@@ -5,6 +5,7 @@ Usage::
     python experiments/train_pretrained.py                 # every entry of the registry
     python experiments/train_pretrained.py A_astar_m10     # selected entries
     python experiments/train_pretrained.py --jobs 2 --plus # every RTAW+ entry, 2 at a time
+    python experiments/train_pretrained.py --summary       # the shipped policies' figures
 
 Each entry of ``rtaw_marl/policies/pretrained/registry.py`` names its ``rtaw-train`` overrides;
 this script runs exactly that command, then writes the best checkpoint, without the
@@ -54,13 +55,40 @@ def train_one(name: str) -> str:
     )
 
 
+def summary() -> str:
+    """A markdown table of the shipped policies' selection figures, from their checkpoints."""
+    lines = [
+        "| policy | model | frames (best / run) | selection TTD | MPDM | lookahead | vs MPDM "
+        "| vs lookahead | curve |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name in PRETRAINED:
+        path = SHIPPED / f"{name}.pt"
+        if not path.is_file():
+            continue
+        ckpt = load_checkpoint(path)
+        best = ckpt["eval"]
+        look = best.get("lookahead_ttd", float("nan"))
+        lines.append(
+            f"| {name} | {ckpt['config']['model'].get('name', 'rtaw')} | {ckpt['frames']:,} / "
+            f"{ckpt['config']['frames']:,} | {best['ttd']:.0f} | {best['mpdm_ttd']:.0f} | "
+            f"{look:.0f} | {100 * (1 - best['ttd'] / best['mpdm_ttd']):+.1f}% | "
+            f"{100 * (1 - best['ttd'] / look):+.1f}% | [png](img/training_{name}.png) |"
+        )
+    return "\n".join(lines)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help="registry entries (default: all)")
     parser.add_argument("--jobs", type=int, default=1, help="training runs at once")
     parser.add_argument("--plus", action="store_true", help="only the RTAW+ entries")
     parser.add_argument("--paper", action="store_true", help="only the paper-network entries")
+    parser.add_argument("--summary", action="store_true", help="print the shipped policies' table")
     args = parser.parse_args()
+    if args.summary:
+        print(summary())
+        return 0
     names = args.names or [
         n for n in PRETRAINED
         if not (args.plus and not n.endswith("_plus")) and not (args.paper and n.endswith("_plus"))

@@ -83,6 +83,18 @@ def test_refuses_to_overwrite_a_run(train_cfg, tmp_path: Path) -> None:
         train(train_cfg(TINY), tmp_path)
 
 
+def test_interop_route_trains_rtaw_plus(train_cfg, tmp_path: Path) -> None:
+    """RTAW+ reads the relational entries of the PettingZoo observation through the
+    wrapper's nested keys, and trains (with an imitation warm start)."""
+    overrides = ["scenario=poc", "frames=512", "eval.every_frames=512", "interop=true",
+                 "model=rtaw_plus", "imitation.teacher=lookahead", "imitation.frames=64"]  # fmt: skip
+    result = train(train_cfg(overrides), tmp_path)
+    ckpt = load_checkpoint(result.last_checkpoint)
+    assert ckpt["model_config"]["name"] == "rtaw_plus"
+    assert ckpt["frames"] == 512
+    assert all(torch.isfinite(v).all() for v in ckpt["model"]["actor"].values())
+
+
 def test_interop_route_trains_through_pettingzoo_wrapper(train_cfg, tmp_path: Path) -> None:
     """A few PPO updates through torchrl's PettingZooWrapper with loss_mask_key."""
     result = train(
@@ -130,7 +142,7 @@ def test_checkpoint_for_other_features_fails_clearly(tmp_path: Path) -> None:
         {"model": {"actor": actor.state_dict(), "critic": critic.state_dict()}, "model_config": {}},
     )
     ckpt = torch.load(path, weights_only=False)
-    ckpt["features"] = {"robots": ["x", "y"], "tasks": FEATURES["tasks"]}
+    ckpt["features"] = {"robots": ["x", "y"], "tasks": FEATURES["rtaw"]["tasks"]}
     torch.save(ckpt, path)
     with pytest.raises(ConfigError, match="trained on observation features"):
         load_checkpoint(path)
