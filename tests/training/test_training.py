@@ -87,7 +87,8 @@ def test_interop_route_trains_rtaw_plus(train_cfg, tmp_path: Path) -> None:
     """RTAW+ reads the relational entries of the PettingZoo observation through the
     wrapper's nested keys, and trains (with an imitation warm start)."""
     overrides = ["scenario=poc", "frames=512", "eval.every_frames=512", "interop=true",
-                 "model=rtaw_plus", "imitation.teacher=lookahead", "imitation.frames=64"]  # fmt: skip
+                 "model=rtaw_plus", "imitation.teacher=lookahead",
+                 "imitation.frames=64"]  # fmt: skip
     result = train(train_cfg(overrides), tmp_path)
     ckpt = load_checkpoint(result.last_checkpoint)
     assert ckpt["model_config"]["name"] == "rtaw_plus"

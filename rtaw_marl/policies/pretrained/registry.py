@@ -23,7 +23,10 @@ SCENARIOS: dict[str, list[str]] = {
     **{f"{p}_astar_m10": [f"layout={p}", "navigator=astar", "env.num_robots=10"] for p in "ABCDE"},
     "open60_direct_m100": ["layout=open", "navigator=direct", "env.num_robots=100"],
     # Table I's 100-robot rows.
-    **{f"{p}_astar_m100": [f"layout={p}", "navigator=astar", "env.num_robots=100"] for p in "ABCDE"},
+    **{
+        f"{p}_astar_m100": [f"layout={p}", "navigator=astar", "env.num_robots=100"]
+        for p in "ABCDE"
+    },
     # Scalability (Table II): large grids with random tasks spread over the whole grid.
     "open300_direct_m100_random": [
         "layout=open", "layout.width=300", "layout.height=300", "navigator=direct",
