@@ -17,7 +17,7 @@ from rtaw_marl.sim.builder import SimSpec
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
 def test_pretrained_checkpoint_is_shipped_and_describes_itself(name: str) -> None:
     path = pretrained_path(name)
-    assert path.stat().st_size < 100_000
+    assert path.stat().st_size < 200_000  # RTAW+ with its critic: about 135 KB
     ckpt = load_checkpoint(path)
     assert "optimizer" not in ckpt
     # The recorded command is the registry's, so the policy can be retrained exactly.

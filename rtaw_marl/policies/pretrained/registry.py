@@ -49,8 +49,16 @@ _RTAW_PLUS = ["model=rtaw_plus", *_BUDGET]
 
 #: name -> the rtaw-train overrides each checkpoint records (besides output_dir, progress):
 #: ``<scenario>`` is the paper's network, ``<scenario>_plus`` RTAW+.
+#: Paper-network entries not trained yet (the session that added the 100-robot rows ran
+#: out of time; ``train_pretrained.py`` trains them once they are listed).
+_UNTRAINED_PAPER = ("D_astar_m100", "E_astar_m100")
+
 PRETRAINED: dict[str, list[str]] = {
-    **{name: [*scenario, *_RTAW] for name, scenario in SCENARIOS.items()},
+    **{
+        name: [*scenario, *_RTAW]
+        for name, scenario in SCENARIOS.items()
+        if name not in _UNTRAINED_PAPER
+    },
     **{f"{name}_plus": [*scenario, *_RTAW_PLUS] for name, scenario in SCENARIOS.items()},
 }
 
