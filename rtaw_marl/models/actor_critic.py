@@ -6,12 +6,14 @@ last); the caller passes the tensordict key of each, which may be nested.
 
 from __future__ import annotations
 
+import torch
+from tensordict import TensorDictBase
 from tensordict.nn import TensorDictModule
 from torchrl.modules import MaskedCategorical, ProbabilisticActor, ValueOperator
 
 from rtaw_marl.models.checkpoint import Actor, Critic
 
-__all__ = ["make_actor", "make_critic"]
+__all__ = ["greedy_action", "make_actor", "make_critic"]
 
 
 def make_actor(net: Actor, keys: tuple | None = None) -> ProbabilisticActor:
@@ -48,3 +50,10 @@ def make_critic(net: Critic, keys: tuple | None = None) -> ValueOperator:
     prefix = keys[-1][:-1] if isinstance(keys[-1], tuple) else ()
     out = (*prefix, "state_value") if prefix else "state_value"
     return ValueOperator(net, in_keys=list(keys), out_keys=[out])
+
+
+def greedy_action(net: Actor, td: TensorDictBase) -> torch.Tensor:
+    """The non-empty slot with the largest logit, ``int64 [*]``, from a tensordict holding
+    ``net.in_keys`` at the top level."""
+    logits = net(*(td[key] for key in net.in_keys))
+    return logits.masked_fill(~td["action_mask"], -torch.inf).argmax(-1)

@@ -22,8 +22,9 @@ import torch
 from tensordict import TensorDict
 
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
+from rtaw_marl.models.actor_critic import greedy_action
 from rtaw_marl.models.checkpoint import Actor, Critic
-from rtaw_marl.policies import make_baseline
+from rtaw_marl.policies import BaselinePolicy, Hindsight, make_baseline
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.config import ImitationConfig
@@ -33,11 +34,12 @@ __all__ = ["imitate"]
 
 @dataclass
 class _Round:
-    """One round's labelled decisions ``[T, B]`` and the critic's targets."""
+    """One round's labelled decisions ``[T, B]`` and the critic's targets (NaN where
+    there is none: the teacher's round, and the stretch's cut-short end)."""
 
     observations: TensorDict
     labels: torch.Tensor
-    returns: torch.Tensor | None
+    returns: torch.Tensor
 
 
 def imitate(
@@ -77,7 +79,8 @@ def imitate(
     rows = []
     for r in range(cfg.rounds):
         data, agreement = _collect(env, teacher, actor, keys, steps, student=r > 0)
-        data.returns = _returns(data.observations, gamma, reward_scale) if r > 0 else None
+        if r > 0:  # the critic learns the student's values, not the teacher's
+            data.returns = _returns(data.observations, gamma, reward_scale)
         rounds.append(data)
         fit = _fit(cfg, actor, critic, optim, rounds)
         rows.append({"round": r, "decisions": sum(x.labels.numel() for x in rounds),
@@ -88,7 +91,7 @@ def imitate(
 @torch.no_grad()
 def _collect(
     env: BatchedWarehouseEnv,
-    teacher: object,
+    teacher: BaselinePolicy | Hindsight,
     actor: Actor,
     keys: tuple[str, ...],
     steps: int,
@@ -102,18 +105,18 @@ def _collect(
         label = torch.tensor([teacher.act_sim(sim) for sim in env.sims])
         action = label
         if student:
-            logits = actor(*(td[k] for k in actor.in_keys))
-            action = logits.masked_fill(~td["action_mask"], -torch.inf).argmax(-1)
+            action = greedy_action(actor, td)
             agree.append((action == label).float().mean().item())
         td["action"] = action
         out = env.step(td)
-        frames.append(td.select(*keys, "action_mask", "action").set("next", out["next"].select(
-            "reward", "done")))  # fmt: skip
+        step = td.select(*keys, "action_mask", "action")
+        frames.append(step.set("next", out["next"].select("reward", "done")))
         labels.append(label)
         td = out["next"]
         if bool(td["done"].any()):
             td = env.reset()
-    data = _Round(torch.stack(frames), torch.stack(labels), None)
+    labels = torch.stack(labels)
+    data = _Round(torch.stack(frames), labels, torch.full(labels.shape, torch.nan))
     return data, float(np.mean(agree)) if agree else float("nan")
 
 
@@ -141,14 +144,7 @@ def _fit(
     """Epochs of minibatches over every labelled decision so far."""
     obs = torch.cat([r.observations.reshape(-1) for r in rounds])
     labels = torch.cat([r.labels.reshape(-1) for r in rounds])
-    returns = torch.cat(
-        [
-            r.returns.reshape(-1)
-            if r.returns is not None
-            else torch.full_like(r.labels, torch.nan, dtype=torch.float32).reshape(-1)
-            for r in rounds
-        ]
-    )
+    returns = torch.cat([r.returns.reshape(-1) for r in rounds])
     has_return = ~returns.isnan()
     gen = torch.Generator().manual_seed(len(rounds))
     total = hits = 0

@@ -26,7 +26,7 @@ from tqdm import tqdm
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import evaluate
-from rtaw_marl.models.actor_critic import make_actor, make_critic
+from rtaw_marl.models.actor_critic import greedy_action, make_actor, make_critic
 from rtaw_marl.models.checkpoint import (
     Actor,
     Critic,
@@ -394,9 +394,7 @@ def greedy_ttd(net: Actor, env: BatchedWarehouseEnv, seeds: list[int]) -> list[f
     """
     td = env.reset_to(seeds)
     while True:
-        mask = td["action_mask"]
-        logits = net(*(td[key] for key in net.in_keys))
-        td["action"] = logits.masked_fill(~mask, -torch.inf).argmax(-1)
+        td["action"] = greedy_action(net, td)
         td = env.step(td)["next"]
         # Every simulator takes num_tasks decisions, so all finish on the same step.
         if bool(td["done"].all()):
