@@ -47,7 +47,7 @@ def run(name: str) -> dict:
         cmd = [str(exe), *CONFIGS[name], f"output_dir={out}", "progress=false"]
         print(" ".join(cmd), flush=True)
         subprocess.run(cmd, check=True, cwd=ROOT)
-    ckpt = torch.load(last, map_location="cpu", weights_only=False)
+    ckpt = torch.load(last, map_location="cpu", weights_only=True)
     return {"overrides": CONFIGS[name], "history": ckpt["history"]}
 
 

@@ -14,12 +14,18 @@ A checkpoint is a ``torch.save`` dict:
 
 It is written to a temporary file in the same folder, fsynced and renamed over the
 target, so a kill at any moment leaves the previous or the new checkpoint, both loadable.
+
+Checkpoints are shared between people, so they are read with ``weights_only=True``:
+tensors, numbers, strings and containers only, never a pickled callable. A crafted file
+is refused before any of its code can run.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import pickle
 import platform
+import re
 import sys
 from collections.abc import Mapping
 from pathlib import Path
@@ -29,6 +35,7 @@ import numpy as np
 import tensordict
 import torch
 import torchrl
+from torch.torch_version import TorchVersion
 
 import rtaw_marl
 from rtaw_marl.envs.features import (
@@ -49,6 +56,7 @@ __all__ = [
     "build_networks",
     "library_versions",
     "load_checkpoint",
+    "load_networks",
     "model_features",
     "plain_model",
     "save_checkpoint",
@@ -73,7 +81,8 @@ def library_versions() -> dict[str, str]:
     """Versions of the libraries a checkpoint depends on."""
     return {
         "python": platform.python_version(),
-        "torch": torch.__version__,
+        # str(): torch's version is a str subclass that a weights-only load refuses.
+        "torch": str(torch.__version__),
         "torchrl": torchrl.__version__,
         "tensordict": tensordict.__version__,
         "numpy": np.__version__,
@@ -95,28 +104,70 @@ def save_checkpoint(path: str | Path, payload: dict[str, Any]) -> Path:
 
 
 def load_checkpoint(path: str | Path) -> dict[str, Any]:
-    """Load and validate a checkpoint.
+    """Load and validate a checkpoint, without running any code stored in it.
 
     Raises:
-        ConfigError: The file is missing, is not an rtaw_marl checkpoint, or was trained
-            on a different observation layout than this version produces.
+        ConfigError: The file is missing, unreadable, holds anything but plain data,
+            is not an rtaw_marl checkpoint, or was trained on a different observation
+            layout than this version produces.
     """
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"checkpoint not found: {path}")
     try:
-        ckpt = torch.load(path, map_location="cpu", weights_only=False)
+        # Checkpoints written before 0.3 stored torch's version object; it is a plain
+        # str subclass, so allowing it lets no code run.
+        with torch.serialization.safe_globals([TorchVersion]):
+            ckpt = torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as exc:
+        found = re.search(r"GLOBAL ([\w.]+)", str(exc))
+        if found is None:
+            raise ConfigError(f"cannot read checkpoint {path}: {_first_line(exc)}") from exc
+        raise ConfigError(
+            f"refusing checkpoint {path}: it holds more than plain data (it would call "
+            f"{found.group(1)} when loaded)"
+        ) from exc
     except Exception as exc:  # torch raises many types for a corrupt file
-        raise ConfigError(f"cannot read checkpoint {path}: {exc}") from exc
+        raise ConfigError(f"cannot read checkpoint {path}: {_first_line(exc)}") from exc
     if not isinstance(ckpt, dict) or ckpt.get("format") != FORMAT:
         raise ConfigError(f"{path} is not an rtaw_marl checkpoint (expected format {FORMAT})")
-    expected = model_features(ckpt.get("model_config", {}))
+    for key in ("model_config", "model"):
+        if not isinstance(ckpt.get(key), dict):
+            raise ConfigError(f"checkpoint {path} has no {key!r} dict")
+    expected = model_features(ckpt["model_config"])
     if ckpt.get("features") != expected:
         raise ConfigError(
             f"checkpoint {path} was trained on observation features {ckpt.get('features')}, "
             f"this version produces {expected}"
         )
     return ckpt
+
+
+def load_networks(ckpt: Mapping[str, Any], path: str | Path) -> tuple[Actor, Critic]:
+    """The actor and critic of a loaded checkpoint, built from its ``model_config``.
+
+    Raises:
+        ConfigError: The weights are missing or do not fit the model the checkpoint
+            describes (a key missing or unexpected, a tensor of another shape).
+    """
+    actor, critic = build_networks(ckpt["model_config"])
+    for name, net in (("actor", actor), ("critic", critic)):
+        state = ckpt["model"].get(name)
+        if not isinstance(state, Mapping):
+            raise ConfigError(f"checkpoint {path} has no {name} weights")
+        try:
+            net.load_state_dict(state)
+        except (RuntimeError, KeyError, TypeError) as exc:
+            raise ConfigError(
+                f"checkpoint {path}: the {name} weights do not fit its model_config "
+                f"{dict(ckpt['model_config'])}: {_first_line(exc).strip()}"
+            ) from exc
+    return actor, critic
+
+
+def _first_line(exc: BaseException) -> str:
+    lines = [line for line in str(exc).splitlines() if line.strip()]
+    return lines[1] if len(lines) > 1 and lines[0].endswith(":") else (lines or [""])[0]
 
 
 def plain_model(model: ModelConfig) -> dict[str, Any]:

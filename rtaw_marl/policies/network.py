@@ -7,7 +7,7 @@ from pathlib import Path
 import torch
 
 from rtaw_marl.envs.features import sim_observation
-from rtaw_marl.models.checkpoint import Actor, build_networks, load_checkpoint
+from rtaw_marl.models.checkpoint import Actor, load_checkpoint, load_networks
 from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["SimNetworkPolicy", "load_policy"]
@@ -21,11 +21,10 @@ def load_policy(path: str | Path, name: str | None = None) -> SimNetworkPolicy:
         name: Label in result tables; ``rtaw:<path>`` by default.
 
     Raises:
-        ConfigError: The checkpoint is missing, unreadable or for another feature layout.
+        ConfigError: The checkpoint is missing, unreadable, unsafe, for another feature
+            layout, or its weights do not fit its model.
     """
-    ckpt = load_checkpoint(path)
-    actor, _ = build_networks(ckpt["model_config"])
-    actor.load_state_dict(ckpt["model"]["actor"])
+    actor, _ = load_networks(load_checkpoint(path), path)
     return SimNetworkPolicy(actor, name=name or f"rtaw:{path}")
 
 

@@ -142,7 +142,7 @@ def test_checkpoint_for_other_features_fails_clearly(tmp_path: Path) -> None:
         tmp_path / "x.pt",
         {"model": {"actor": actor.state_dict(), "critic": critic.state_dict()}, "model_config": {}},
     )
-    ckpt = torch.load(path, weights_only=False)
+    ckpt = torch.load(path, weights_only=True)
     ckpt["features"] = {"robots": ["x", "y"], "tasks": FEATURES["rtaw"]["tasks"]}
     torch.save(ckpt, path)
     with pytest.raises(ConfigError, match="trained on observation features"):
