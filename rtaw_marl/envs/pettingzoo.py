@@ -56,9 +56,12 @@ share the scale); coordinates use `x` = column, `y` = row.
 
 ## Actions
 
-The index of a queue slot. An out-of-range or empty slot raises
-`rtaw_marl.errors.InvalidActionError` (nothing is silently fixed). The chosen slot is
-refilled from the task stream.
+The index of a queue slot: a Python or NumPy integer (or a 0-d integer array). The
+chosen slot is refilled from the task stream. Anything else raises
+`rtaw_marl.errors.InvalidActionError` and leaves the env as it was (nothing is silently
+fixed): an out-of-range or empty slot, a float (even `1.0`), a bool, a string, an array
+of shape other than `()`, or `None` for a live agent. `None` is the only valid action of
+a terminated or truncated agent.
 
 ## Rewards
 
@@ -72,7 +75,15 @@ An episode is `num_tasks` decisions. In `episode_mode="drain"` (default) exactly
 `num_tasks` tasks are served and the episode *terminates*; in `"paper"` mode the queue
 is always refilled, unserved tasks remain at the end, and the episode is *truncated*.
 Then every agent is terminated (or truncated) at once, and `infos[agent]["episode"]`
-holds the episode metrics (`ttd`, `makespan`, ...).
+holds the episode metrics (`ttd`, `makespan`, ...). Once every agent has stepped with
+`None` and been removed, `last()` still answers for `agent_selection` (the last agent
+removed): its final observation, reward `0`, the episode's termination and truncation
+flags, and the episode info.
+
+## Seeding
+
+`reset(seed=s)` takes `None` or an integer `>= 0` (Python or NumPy); anything else (a
+negative or float seed, a bool, a string) raises `rtaw_marl.errors.ConfigError`.
 
 ## Arguments
 
@@ -113,8 +124,10 @@ from rtaw_marl.envs.features import (
     task_features,
 )
 from rtaw_marl.envs.text import render_ansi
+from rtaw_marl.errors import InvalidActionError
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.inputs import seed_value
 from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
@@ -127,7 +140,26 @@ def env(**kwargs: Any) -> AECEnv:
     ``AssertOutOfBoundsWrapper`` is left out on purpose: the raw env already raises a
     clear :class:`~rtaw_marl.errors.InvalidActionError` for any illegal action.
     """
-    return wrappers.OrderEnforcingWrapper(raw_env(**kwargs))
+    return _OrderEnforcing(raw_env(**kwargs))
+
+
+class _OrderEnforcing(wrappers.OrderEnforcingWrapper):
+    """``OrderEnforcingWrapper`` whose :meth:`last` is the env's own.
+
+    PettingZoo's ``AECEnv.last`` reads the per-agent tables, which hold live agents only,
+    so it raises ``KeyError`` once every agent is removed; :meth:`raw_env.last` answers.
+    """
+
+    def last(
+        self, observe: bool = True
+    ) -> tuple[dict[str, np.ndarray] | None, float, bool, bool, dict[str, Any]]:
+        """:meth:`raw_env.last`, after the wrapper's check that ``reset`` was called."""
+        if not self._has_reset:
+            raise AttributeError("last() cannot be called before reset()")
+        return self.env.last(observe)
+
+    def __str__(self) -> str:
+        return str(self.env)
 
 
 class raw_env(AECEnv):
@@ -208,8 +240,12 @@ class raw_env(AECEnv):
 
         Without a seed, the episode seed is drawn from a generator seeded by the last
         explicit seed, so a seeded sequence of episodes is reproducible.
+
+        Raises:
+            ConfigError: ``seed`` is neither ``None`` nor an integer ``>= 0``.
         """
         if seed is not None:
+            seed = seed_value(seed)
             self._seed_rng = np.random.default_rng(seed)
             episode_seed = seed
         else:
@@ -264,12 +300,24 @@ class raw_env(AECEnv):
 
     # ------------------------------------------------------------------ step
     def step(self, action: int | None) -> None:
+        """Give queue slot ``action`` to the selected robot (``None``: remove a done agent).
+
+        Raises:
+            InvalidActionError: ``action`` is not a valid slot of a live agent or ``None``
+                for a done one, or every agent is already removed; the env is unchanged.
+        """
         agent = self.agent_selection
-        if self.terminations[agent] or self.truncations[agent]:
+        terminated = self.terminations.get(agent)
+        if terminated is None:
+            raise InvalidActionError("the episode is over and every agent removed; call reset()")
+        if terminated or self.truncations[agent]:
             self._dead_step(action)
             return
         if action is None:
-            raise ValueError(f"{agent} is not done; its action must be a queue slot, got None")
+            raise InvalidActionError(
+                f"{agent} is not done; its action must be a queue slot "
+                f"(0..{self.sim.queue_len - 1}), got None (None is only for a done agent)"
+            )
         sim = self.sim
         self._cumulative_rewards[agent] = 0.0
         reward = sim.step(action)
@@ -292,14 +340,16 @@ class raw_env(AECEnv):
             self.truncations = done
         else:
             self.terminations = done
-        info = {"episode": sim.metrics().as_dict()}
-        self.infos = {agent: info for agent in self.agents}
+        self._final_info = {"episode": sim.metrics().as_dict()}
+        self.infos = dict.fromkeys(self.agents, self._final_info)
 
     def _dead_step(self, action: int | None) -> None:
         """Remove the selected finished agent; all agents finish together, in id order."""
-        if action is not None:
-            raise ValueError("when an agent is done, the only valid action is None")
         agent = self.agent_selection
+        if action is not None:
+            raise InvalidActionError(
+                f"{agent} is done; its only valid action is None, got {action!r}"
+            )
         for table in (
             self.terminations,
             self.truncations,
@@ -311,6 +361,23 @@ class raw_env(AECEnv):
         self.agents.remove(agent)
         if self.agents:
             self.agent_selection = self.agents[0]
+
+    def last(
+        self, observe: bool = True
+    ) -> tuple[dict[str, np.ndarray] | None, float, bool, bool, dict[str, Any]]:
+        """Observation, cumulative reward, terminated, truncated and info of
+        ``agent_selection``, as ``AECEnv.last``.
+
+        Once every agent has been removed (the per-agent tables are empty), the answer
+        for ``agent_selection``, the last agent removed, is its final observation, reward
+        0 (its reward was handed out before its removal), the episode's flags and info.
+        """
+        agent = self.agent_selection
+        if agent in self.terminations:
+            return super().last(observe)
+        truncated = self.sim.truncated
+        observation = self.observe(agent) if observe else None
+        return observation, 0.0, not truncated, truncated, self._final_info
 
     # ------------------------------------------------------------------ render
     def render(self) -> str | None:

@@ -13,7 +13,9 @@ Keys (batch size ``[B]``):
   float32 ``[B, 3]``, ``"relations"`` float32 ``[B, N, 8]``, ``"rivals"`` float32
   ``[B, N, K, 4]``, ``"action_mask"`` bool ``[B, N]``: exactly the PettingZoo env's
   observation of the free robot (same feature functions, bit-identical).
-* ``"action"`` int64 ``[B]``: the chosen slot.
+* ``"action"`` int64 ``[B]``: the chosen slot. A non-integer tensor, or a slot out of
+  range or empty, raises :class:`~rtaw_marl.errors.InvalidActionError` naming the
+  simulator, before any simulator steps.
 * ``("next", "reward")`` float32 ``[B, 1]``: minus the chosen task's TTD (or the
   ablation reward), unscaled.
 * ``"done"``, ``"terminated"``, ``"truncated"`` bool ``[B, 1]``: ``drain`` episodes
@@ -44,9 +46,10 @@ from rtaw_marl.envs.features import (
     robot_features,
     task_features,
 )
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimFactory, SimSpec
 from rtaw_marl.sim.config import SimBuffers
+from rtaw_marl.sim.inputs import seed_value
 
 __all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]
 
@@ -118,7 +121,7 @@ class BatchedWarehouseEnv(EnvBase):
 
     # ------------------------------------------------------------------ seeding
     def _set_seed(self, seed: int | None) -> None:
-        base = 0 if seed is None else int(seed)
+        base = 0 if seed is None else seed_value(seed)
         self._seed_rngs = [np.random.default_rng([base, i]) for i in range(self.num_envs)]
 
     # ------------------------------------------------------------------ reset / step
@@ -130,12 +133,15 @@ class BatchedWarehouseEnv(EnvBase):
         return self._reset_sims({int(i): int(self._seed_rngs[i].integers(2**62)) for i in which})
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
-        actions = tensordict["action"].reshape(self.num_envs).tolist()
+        slots = self._checked_slots(tensordict["action"])
         reward = np.empty((self.num_envs, 1), dtype=np.float32)
         done = np.zeros((self.num_envs, 1), dtype=bool)
         truncated = np.zeros((self.num_envs, 1), dtype=bool)
-        for i, (sim, action) in enumerate(zip(self.sims, actions, strict=True)):
-            reward[i, 0] = sim.step(action)
+        for i, (sim, slot) in enumerate(zip(self.sims, slots, strict=True)):
+            try:
+                reward[i, 0] = sim.step(slot)
+            except InvalidActionError as exc:
+                raise InvalidActionError(f"simulator {i}: {exc}") from None
             if sim.done:
                 done[i, 0] = True
                 truncated[i, 0] = sim.truncated
@@ -152,6 +158,32 @@ class BatchedWarehouseEnv(EnvBase):
         )
         return out
 
+    def _checked_slots(self, action: torch.Tensor) -> list[int]:
+        """The batch's actions as ints, checked at once before any simulator steps.
+
+        Raises:
+            InvalidActionError: ``action`` is not an integer tensor of ``B`` slots, or a
+                slot is out of range or empty (the message names the first simulator).
+        """
+        if action.dtype.is_floating_point or action.dtype.is_complex or action.dtype == torch.bool:
+            raise InvalidActionError(f"action must be an integer tensor, got {action.dtype}")
+        if action.numel() != self.num_envs:
+            raise InvalidActionError(
+                f"action must hold {self.num_envs} slots, got shape {tuple(action.shape)}"
+            )
+        slots = action.reshape(self.num_envs).numpy()
+        in_range = (slots >= 0) & (slots < self.queue_len)
+        legal = in_range & self._mask[np.arange(self.num_envs), np.where(in_range, slots, 0)]
+        if not legal.all():
+            i = int(np.flatnonzero(~legal)[0])
+            problem = (
+                f"is not a queue slot (0..{self.queue_len - 1})"
+                if not in_range[i]
+                else "names an empty queue slot"
+            )
+            raise InvalidActionError(f"simulator {i}: action {int(slots[i])} {problem}")
+        return slots.tolist()
+
     def reset_to(self, seeds: list[int] | np.ndarray) -> TensorDictBase:
         """Reset every simulator with an explicit episode seed (for evaluation).
 
@@ -161,7 +193,7 @@ class BatchedWarehouseEnv(EnvBase):
         Returns:
             The observation tensordict, as :meth:`reset` gives.
         """
-        seeds = [int(s) for s in seeds]
+        seeds = [seed_value(s, "reset_to seed") for s in seeds]
         if len(seeds) != self.num_envs:
             raise ConfigError(f"reset_to needs {self.num_envs} seeds, got {len(seeds)}")
         return self._reset_sims(dict(enumerate(seeds)))

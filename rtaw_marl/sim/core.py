@@ -41,6 +41,7 @@ import numpy as np
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.config import REWARDS, SimBuffers, SimConfig
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, InstantTravel
+from rtaw_marl.sim.inputs import slot_index
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
 from rtaw_marl.sim.navigation import Navigator
@@ -272,23 +273,13 @@ class WarehouseSim:
             The reward of this decision (minus the TTD of the chosen task by default).
 
         Raises:
-            InvalidActionError: ``action`` is out of range or names an empty slot, or the
-                episode is over.
+            InvalidActionError: ``action`` is not an integer scalar (see
+                :func:`~rtaw_marl.sim.inputs.slot_index`), is out of range or names an
+                empty slot, or the episode is over.
         """
         if self.done:
             raise InvalidActionError("the episode is over; call reset()")
-        if isinstance(action, (bool, np.bool_)):
-            raise InvalidActionError(f"action must be an integer slot index, got {action!r}")
-        try:
-            slot = int(action)
-        except (TypeError, ValueError):
-            raise InvalidActionError(
-                f"action must be an integer slot index, got {action!r}"
-            ) from None
-        if not (0 <= slot < self.queue_len and slot == action):
-            raise InvalidActionError(
-                f"action {action!r} is not a queue slot (0..{self.queue_len - 1})"
-            )
+        slot = slot_index(action, self.queue_len)
         if not self.queue_mask[slot]:
             raise InvalidActionError(f"action {slot} names an empty queue slot")
 

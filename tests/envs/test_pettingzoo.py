@@ -539,14 +539,123 @@ def test_masked_slot_raises() -> None:
 
 def test_none_action_for_live_agent_and_action_for_dead_agent_raise() -> None:
     env = _env_at_first_decision(num_robots=2, num_tasks=1, queue_len=2)
-    with pytest.raises(ValueError, match="robot_0"):
+    with pytest.raises(InvalidActionError, match=r"robot_0 is not done.*got None"):
         env.step(None)
     env.step(0)
     assert is_done(env)
-    with pytest.raises(ValueError, match="None"):
+    with pytest.raises(InvalidActionError, match="only valid action is None, got 0"):
         env.step(0)
     env.step(None)
     assert len(env.agents) == 1
+
+
+#: Both ways to build the env: the wrapped ``env()`` and the bare ``raw_env``.
+FACTORIES = pytest.mark.parametrize("make", [warehouse_v0.env, warehouse_v0.raw_env])
+
+#: Actions that are not an integer scalar, each with the words its error must contain.
+NOT_INTEGER_ACTIONS = [
+    (float("inf"), ["integer slot index", "inf", "float"]),
+    (float("nan"), ["integer slot index", "nan"]),
+    (1.0, ["integer slot index", "1.0", "float"]),
+    (-0.0, ["integer slot index"]),
+    (np.float32(1), ["integer slot index", "float32"]),
+    (np.array(1.0), ["integer slot index"]),
+    (True, ["integer slot index", "True", "bool"]),
+    (False, ["integer slot index", "bool"]),
+    (np.bool_(True), ["integer slot index", "bool"]),
+    ("1", ["integer slot index", "'1'", "str"]),
+    (np.array([1]), ["integer slot index", "shape (1,)"]),
+    (np.array([[0, 1]]), ["integer slot index", "shape (1, 2)"]),
+    (None, ["robot_0 is not done", "0..3", "None"]),
+]
+
+
+@FACTORIES
+@pytest.mark.parametrize(("action", "words"), NOT_INTEGER_ACTIONS, ids=repr)
+def test_non_integer_actions_raise_and_change_nothing(
+    make: Callable[..., Any], action: Any, words: list[str]
+) -> None:
+    env = make(num_robots=2, num_tasks=10, queue_len=4)
+    env.reset(seed=0)
+    agent = env.agent_selection
+    with pytest.raises(InvalidActionError) as excinfo:
+        env.step(action)
+    message = str(excinfo.value)
+    for word in words:
+        assert word in message, f"{word!r} not in {message!r}"
+    assert env.agent_selection == agent
+    assert env.unwrapped.sim.decisions == 0
+    assert not env.terminations[agent]
+    assert env.rewards[agent] == 0.0
+    env.step(1)
+    assert env.unwrapped.sim.decisions == 1
+
+
+@FACTORIES
+@pytest.mark.parametrize(
+    "action", [1, np.int64(1), np.int32(1), np.uint8(1), np.array(1)], ids=repr
+)
+def test_integer_actions_of_any_integer_type_work(make: Callable[..., Any], action: Any) -> None:
+    """NumPy integers and 0-d integer arrays name the same slot as the Python int."""
+    env = make(num_robots=2, num_tasks=10, queue_len=4)
+    env.reset(seed=0)
+    reference = make(num_robots=2, num_tasks=10, queue_len=4)
+    reference.reset(seed=0)
+    agent = env.agent_selection
+    env.step(action)
+    reference.step(1)
+    assert env.unwrapped.sim.decisions == 1
+    assert env.rewards[agent] == reference.rewards[agent]
+    assert env.agent_selection == reference.agent_selection
+
+
+@FACTORIES
+@pytest.mark.parametrize(
+    "seed", [-1, 1.5, "a", True, np.float64(2.0), np.int64(-3), [1], np.array([1])], ids=repr
+)
+def test_bad_seeds_raise_config_errors(make: Callable[..., Any], seed: Any) -> None:
+    env = make(num_robots=2, num_tasks=10, queue_len=4)
+    with pytest.raises(ConfigError, match=r"seed must be an integer >= 0, got "):
+        env.reset(seed=seed)
+    env.reset(seed=0)  # the env is still usable
+    assert env.agents == ["robot_0", "robot_1"]
+
+
+@FACTORIES
+def test_good_seeds_none_and_any_non_negative_integer(make: Callable[..., Any]) -> None:
+    env = make(num_robots=2, num_tasks=6, queue_len=3)
+    reference = trajectory(env, seed=7)
+    for seed in (np.int64(7), np.uint32(7), np.array(7)):
+        assert_same_trajectory(trajectory(env, seed=seed), reference)
+    for seed in (None, 0, 2**70):
+        env.reset(seed=seed)
+        assert env.agents == ["robot_0", "robot_1"]
+
+
+@FACTORIES
+@pytest.mark.parametrize("mode", ["drain", "paper"])
+def test_last_after_every_agent_is_done(make: Callable[..., Any], mode: str) -> None:
+    """Once every agent has been removed, last() answers for agent_selection (the last
+    agent removed): final observation, reward 0, the episode's flags and its info."""
+    env = make(num_robots=3, num_tasks=4, queue_len=2, episode_mode=mode)
+    finals = [turn for turn in play(env, seed=1) if turn[3] or turn[4]]
+    assert env.agents == []
+    assert env.rewards == env.terminations == env.truncations == env.infos == {}
+    assert sorted(turn[0] for turn in finals) == ["robot_0", "robot_1", "robot_2"]
+    obs, reward, terminated, truncated, info = env.last()
+    assert env.agent_selection == finals[-1][0]
+    assert reward == 0.0
+    assert (terminated, truncated) == ((True, False) if mode == "drain" else (False, True))
+    assert info == finals[-1][5]
+    assert info["episode"]["decisions"] == 4
+    assert env.observation_space(env.agent_selection).contains(obs)
+    assert not obs["action_mask"].any()
+    assert env.last(observe=False)[0] is None
+    if make is warehouse_v0.raw_env:
+        with pytest.raises(InvalidActionError, match="call reset"):
+            env.step(None)
+    env.reset(seed=1)  # a new episode starts as usual
+    assert env.last()[1:3] == (0.0, False)
 
 
 @pytest.mark.parametrize(

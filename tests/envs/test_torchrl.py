@@ -11,7 +11,7 @@ from torchrl.envs.utils import check_env_specs
 
 from rtaw_marl import warehouse_v0
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
-from rtaw_marl.errors import InvalidActionError
+from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimSpec
 
 SMALL = {"num_robots": 4, "num_tasks": 12, "queue_len": 3}
@@ -130,3 +130,39 @@ def test_invalid_action_raises() -> None:
     td["action"] = torch.tensor([7])
     with pytest.raises(InvalidActionError):
         env.step(td)
+
+
+@pytest.mark.parametrize(
+    ("action", "match"),
+    [
+        (torch.tensor([0.0, 1.0, 0.0]), "integer tensor, got torch.float32"),
+        (torch.tensor([True, False, True]), "integer tensor, got torch.bool"),
+        (torch.tensor([0, 1, 4]), r"simulator 2: action 4 is not a queue slot \(0..3\)"),
+        (torch.tensor([0, -1, 0]), "simulator 1: action -1 is not a queue slot"),
+        (torch.tensor([0, 2, 0]), "simulator 1: action 2 names an empty queue slot"),
+    ],
+)
+def test_bad_batched_action_raises_before_any_simulator_steps(
+    action: torch.Tensor, match: str
+) -> None:
+    """A float, bool, out-of-range or empty slot anywhere in the batch fails at once, with
+    the simulator named, and no simulator has stepped (slots 2 and 3 start empty)."""
+    env = _env(num_envs=3, num_tasks=2, queue_len=4)
+    td = env.reset()
+    assert td["action_mask"][:, 2:].sum() == 0
+    td["action"] = action
+    with pytest.raises(InvalidActionError, match=match):
+        env.step(td)
+    assert [sim.decisions for sim in env.sims] == [0, 0, 0]
+    td["action"] = torch.tensor([0, 1, 0])
+    env.step(td)
+    assert [sim.decisions for sim in env.sims] == [1, 1, 1]
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, True])
+def test_bad_seeds_raise_config_errors(seed: object) -> None:
+    env = _env(num_envs=2)
+    with pytest.raises(ConfigError, match="seed must be an integer >= 0"):
+        env.reset_to([0, seed])
+    with pytest.raises(ConfigError, match="seed must be an integer >= 0"):
+        _env(num_envs=1, seed=seed)

@@ -210,7 +210,10 @@ def test_two_task_needs_queue_of_two() -> None:
     [
         (-1, "not a queue slot"),
         (3, "not a queue slot"),
-        (0.5, "not a queue slot"),
+        (0.5, "integer slot index"),
+        (1.0, "integer slot index"),
+        (float("inf"), "integer slot index"),
+        (True, "integer slot index"),
         ("x", "integer slot index"),
         (None, "integer slot index"),
     ],

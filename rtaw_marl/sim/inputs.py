@@ -1,0 +1,93 @@
+"""Checks of the values a caller hands the simulator at run time: actions and seeds.
+
+Both envs (the PettingZoo AEC env and the batched TorchRL env) pass user values through
+these, so a bad action or seed fails the same way, with one clear message, whichever
+route it takes: an :class:`~rtaw_marl.errors.InvalidActionError` for an action, a
+:class:`~rtaw_marl.errors.ConfigError` for a seed.
+"""
+
+from __future__ import annotations
+
+import operator
+
+import numpy as np
+
+from rtaw_marl.errors import ConfigError, InvalidActionError
+
+__all__ = ["seed_value", "slot_index"]
+
+
+def _integer(value: object) -> int | None:
+    """``value`` as an ``int`` if it is an integer scalar, else ``None``.
+
+    Integer scalars are Python and NumPy integers and 0-d integer arrays or tensors; a
+    bool (``True``, ``np.True_``, a bool array), a float (even ``1.0``), a string, and
+    an array of any shape other than ``()`` are not.
+    """
+    if type(value) is int:  # the common case, first
+        return value
+    if isinstance(value, (bool, np.bool_)) or str(getattr(value, "dtype", "")) in (
+        "bool",
+        "torch.bool",
+    ):
+        return None
+    if tuple(getattr(value, "shape", ())) != ():
+        return None
+    try:
+        return operator.index(value)
+    except TypeError:
+        return None
+
+
+def _describe(value: object) -> str:
+    """``value`` for an error message: its repr and type (and shape, for an array)."""
+    shape = getattr(value, "shape", None)
+    kind = type(value).__name__
+    if shape is not None and tuple(shape) != ():
+        kind = f"{kind} of shape {tuple(shape)}"
+    return f"{value!r} ({kind})"
+
+
+def slot_index(action: object, queue_len: int) -> int:
+    """The queue slot ``action`` names, checked against ``0 .. queue_len - 1``.
+
+    Args:
+        action: A Python or NumPy integer, or a 0-d integer array or tensor.
+        queue_len: ``N``, the number of slots.
+
+    Returns:
+        The slot as a Python ``int``.
+
+    Raises:
+        InvalidActionError: ``action`` is not an integer scalar (a bool, a float even if
+            integral, ``inf``, ``None``, a string, an array of shape other than ``()``),
+            or it is out of range. Whether the slot holds a task is the caller's check.
+    """
+    slot = _integer(action)
+    if slot is None:
+        raise InvalidActionError(
+            f"action must be an integer slot index in 0..{queue_len - 1}, got {_describe(action)}"
+        )
+    if not 0 <= slot < queue_len:
+        raise InvalidActionError(f"action {slot} is not a queue slot (0..{queue_len - 1})")
+    return slot
+
+
+def seed_value(seed: object, name: str = "seed") -> int:
+    """``seed`` as a Python ``int``, checked to be an integer ``>= 0``.
+
+    Args:
+        seed: A Python or NumPy integer (or a 0-d integer array or tensor).
+        name: What the seed is called in the error message.
+
+    Returns:
+        The seed as a Python ``int``.
+
+    Raises:
+        ConfigError: ``seed`` is negative or not an integer (a bool, a float even if
+            integral, a string, ...).
+    """
+    value = _integer(seed)
+    if value is None or value < 0:
+        raise ConfigError(f"{name} must be an integer >= 0, got {_describe(seed)}")
+    return value
