@@ -11,6 +11,7 @@ native env is the fast route.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass
 
 from tensordict import TensorDictBase
@@ -92,9 +93,15 @@ def make_interop_env(spec: SimSpec, seed: int) -> PettingZooWrapper:
     """
     env_keys = {f.name: getattr(spec.env, f.name) for f in dataclasses.fields(spec.env)}
     aec = warehouse_env(layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks, **env_keys)
-    return PettingZooWrapper(
-        aec, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=seed
-    )
+    with warnings.catch_warnings():
+        # The wrapper warns on any PettingZoo but the one torchrl is tested with; the
+        # PettingZoo this package pins (pyproject.toml) is covered by its interop tests.
+        warnings.filterwarnings(
+            "ignore", message=r"PettingZoo in TorchRL is tested using version", category=UserWarning
+        )
+        return PettingZooWrapper(
+            aec, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=seed
+        )
 
 
 def acting_reward(data: TensorDictBase, keys: TrainKeys) -> float:

@@ -1,13 +1,15 @@
-"""Run logging: CSV by default, TensorBoard on request."""
+"""Run logging: CSV by default, TensorBoard on request; torchrl's console notes hidden."""
 
 from __future__ import annotations
 
+import logging
+import os
 from collections.abc import Mapping
 from pathlib import Path
 
 from rtaw_marl.errors import ConfigError
 
-__all__ = ["LOGGERS", "RunLogger"]
+__all__ = ["LOGGERS", "RunLogger", "quiet_torchrl_logs"]
 
 LOGGERS = ("csv", "tensorboard", "none")
 
@@ -48,3 +50,19 @@ class RunLogger:
 
     def close(self) -> None:
         """Flush the CSV files (torchrl's CSV logger writes on each call)."""
+
+
+def quiet_torchrl_logs() -> None:
+    """Hide torchrl's INFO console lines; its warnings and errors still show.
+
+    torchrl logs notes such as ``Initialized LazyTensorStorage with ... shape`` at INFO,
+    in colour, on stdout; a user can do nothing about them. A level set through
+    ``RL_LOGGING_LEVEL`` (torchrl's own switch, read at its import) is left as it is.
+    """
+    if "RL_LOGGING_LEVEL" in os.environ:
+        return
+    import torchrl  # noqa: F401  (its import sets the level to INFO: lower it after that)
+
+    logger = logging.getLogger("torchrl")
+    if logger.getEffectiveLevel() < logging.WARNING:
+        logger.setLevel(logging.WARNING)

@@ -46,7 +46,7 @@ from rtaw_marl.training.interop import (
     acting_reward,
     make_interop_env,
 )
-from rtaw_marl.training.logging import RunLogger
+from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
 from rtaw_marl.utils.plain import as_plain
 from rtaw_marl.viz.plots import plot_training_curve
 
@@ -110,6 +110,7 @@ class Progress:
 def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``."""
     _check(cfg)
+    quiet_torchrl_logs()
     run_dir = Path(run_dir)
     if (run_dir / "checkpoints" / "last.pt").exists() and not cfg.resume:
         raise ConfigError(
