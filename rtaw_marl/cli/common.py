@@ -7,10 +7,14 @@ import os
 import sys
 from collections.abc import Callable
 from functools import wraps
+from pathlib import Path
 from typing import Any
 
 import hydra
+from hydra.core.hydra_config import HydraConfig
 from hydra.errors import HydraException
+from hydra.experimental.callback import Callback
+from hydra.types import RunMode
 from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
@@ -19,8 +23,9 @@ from rtaw_marl.errors import ConfigError, RtawError
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["exit_on_user_error", "hydra_entry", "policies_from_cfg", "typed"]
+__all__ = ["SweepFailures", "exit_on_user_error", "hydra_entry", "policies_from_cfg", "typed"]
 
 
 def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable[[], None]:
@@ -28,7 +33,9 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
 
     A composition error (unknown key, option or value type) becomes one ``error: ...``
     line and exit status 2, like every other user error, instead of Hydra's multi-line
-    report and status 1.
+    report and status 1. In a sweep, a failed job prints its own line and the others
+    still run; the sweep then exits 2 (:class:`SweepFailures`). Ctrl-C prints one line
+    and exits 130.
     """
     register_configs()
     hydra_main = hydra.main(config_path=str(CONF_DIR), config_name=config_name, version_base="1.3")(
@@ -42,8 +49,11 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
         try:
             hydra_main()
         except (HydraException, OmegaConfBaseException, RtawError) as exc:
-            print(f"error: {config_error(exc)}", file=sys.stderr)
+            print(f"error: {config_error(exc)}".splitlines()[0], file=sys.stderr)
             sys.exit(2)
+        except KeyboardInterrupt as exc:
+            print(f"interrupted{': ' + str(exc) if str(exc) else ''}", file=sys.stderr)
+            sys.exit(130)
         finally:
             if previous is None:
                 os.environ.pop("HYDRA_FULL_ERROR", None)
@@ -54,18 +64,66 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
     return main
 
 
+#: Written into a sweep job's folder when the job fails on a user error.
+FAILED_MARKER = "FAILED"
+
+
 def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
-    """Turn user errors into one ``error: ...`` line on stderr and exit status 2."""
+    """Turn user errors into one ``error: ...`` line on stderr and exit status 2.
+
+    In a sweep the line names the job (number and overrides), and the job returns
+    instead of ending the process, so the other jobs still run; it leaves a ``FAILED``
+    file in its folder, from which :class:`SweepFailures` sets the sweep's exit status.
+    """
 
     @wraps(fn)
     def wrapper(cfg: DictConfig) -> Any:
         try:
             return fn(cfg)
         except (RtawError, HydraException, OmegaConfBaseException) as exc:
-            print(f"error: {config_error(exc)}".splitlines()[0], file=sys.stderr)
-            sys.exit(2)
+            message = str(config_error(exc)).splitlines()[0]
+            job = _sweep_job()
+            if job is None:
+                print(f"error: {message}", file=sys.stderr)
+                sys.exit(2)
+            print(f"error: {job}: {message}", file=sys.stderr)
+            folder = Path(HydraConfig.get().runtime.output_dir)
+            atomic_write(
+                folder / FAILED_MARKER, lambda fh: fh.write(f"{job}: {message}\n".encode())
+            )
+            return None
 
     return wrapper
+
+
+def _sweep_job() -> str | None:
+    """``job 3 (env.num_robots=0)`` inside a multirun job, else ``None``."""
+    if not HydraConfig.initialized():
+        return None
+    hydra_cfg = HydraConfig.get()
+    if hydra_cfg.mode != RunMode.MULTIRUN:
+        return None
+    return f"job {hydra_cfg.job.num} ({' '.join(hydra_cfg.overrides.task)})"
+
+
+class SweepFailures(Callback):
+    """Hydra callback (``hydra.callbacks`` of the CLI configs): after a sweep, exit 2
+    if any job failed, with one line that counts them (each printed its own)."""
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        sweep_dir = Path(str(config.hydra.sweep.dir))
+        failed = sorted(sweep_dir.glob(f"*/{FAILED_MARKER}"))
+        if failed:
+            jobs = len(
+                [p for p in sweep_dir.iterdir() if p.is_dir() and not p.name.startswith(".")]
+            )
+            print(
+                f"error: {len(failed)} of {jobs} jobs failed (their errors are above and in "
+                f"{sweep_dir}/*/{FAILED_MARKER})",
+                file=sys.stderr,
+            )
+            # SystemExit, not an exception: Hydra turns callback exceptions into warnings.
+            raise SystemExit(2)
 
 
 def typed(cfg: DictConfig | Any) -> Any:

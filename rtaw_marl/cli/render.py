@@ -23,6 +23,7 @@ from rtaw_marl.evaluation.config import RenderConfig
 from rtaw_marl.evaluation.evaluate import run_episode
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.mapf.conflicts import check_schedule
+from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.gif import render_gif
 
 
@@ -39,12 +40,15 @@ def run(cfg: DictConfig | RenderConfig) -> Path:
             f"navigator={cfg.navigator.name} moves robots independently (they pass through "
             "each other); render with navigator=sipp or navigator=cbs"
         )
+    # Checked before the episode is played and drawn, which can take minutes.
+    output = check_writable_file(
+        cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif"
+    )
     sim = build_sim(cfg.sim_spec())
     (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
     metrics = run_episode(sim, policy, int(cfg.seed))
     schedule = sim.schedule()
     check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
-    output = cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif"
     title = f"{name} | {cfg.navigator.name} | {sim.layout.name} | seed {cfg.seed}"
     path = render_gif(
         sim.layout,

@@ -9,6 +9,8 @@ the config, and :func:`rtaw_marl.config.to_typed` turns the result into dataclas
 
 from __future__ import annotations
 
+import itertools
+import os
 from typing import Any
 
 from hydra.core.config_store import ConfigStore
@@ -46,6 +48,11 @@ def register_configs() -> None:
     # seeds='${range:0,20}' on the command line: the 20 evaluation seeds, without typing them.
     if not OmegaConf.has_resolver("range"):
         OmegaConf.register_new_resolver("range", lambda a, b: list(range(int(a), int(b))))
+    # Run folders end in a run id, so two runs started in the same second never share
+    # one. Cached: Hydra copies the cache into every job of a sweep, so the jobs of a
+    # joblib sweep (other processes) agree with the folder their parent made.
+    if not OmegaConf.has_resolver("run_id"):
+        OmegaConf.register_new_resolver("run_id", _run_id, use_cache=True)
     store = ConfigStore.instance()
     for group, options in GROUPS.items():
         for name, schema in options.items():
@@ -53,6 +60,15 @@ def register_configs() -> None:
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
     _registered = True
+
+
+_runs_in_process = itertools.count()
+
+
+def _run_id() -> str:
+    """The process id; ``<pid>-<k>`` for the k-th later run of the same process."""
+    k = next(_runs_in_process)
+    return f"{os.getpid()}-{k}" if k else str(os.getpid())
 
 
 def _node(schema: type) -> DictConfig | Any:

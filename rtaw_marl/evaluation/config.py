@@ -28,7 +28,10 @@ class EvalConfig(SimGroups):
             compared with, besides MPDM: a paired TTD difference with its interval.
         lower_bound: Report the assignment lower bound on TTD and each policy's gap to
             it (drain mode only); off by default: it is loose and costly at large sizes.
-        output: Where ``results.json`` goes; ``None`` means the Hydra run folder.
+        output: Where ``results.json`` goes; ``None`` means the Hydra run folder. Each
+            finished episode is also appended to ``<stem>.episodes.jsonl`` beside it.
+        resume: Take the episodes already in that journal (a killed run with the same
+            ``output`` and setting) instead of running them again.
         progress: Show a tqdm progress bar.
         torch_threads: torch intra-op threads for network policies.
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
@@ -41,6 +44,7 @@ class EvalConfig(SimGroups):
     compare_to: str | None = None
     lower_bound: bool = False
     output: str | None = None
+    resume: bool = False
     progress: bool = True
     torch_threads: int = 1
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)

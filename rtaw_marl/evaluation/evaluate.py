@@ -6,6 +6,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Protocol
 
+from rtaw_marl.evaluation.journal import EpisodeJournal
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.mapf.conflicts import check_schedule
 from rtaw_marl.sim.metrics import EpisodeMetrics
@@ -60,8 +61,18 @@ def evaluate(
     policies: Mapping[str, SimPolicy],
     seeds: Sequence[int],
     on_decisions: Callable[[int], None] | None = None,
+    journal: EpisodeJournal | None = None,
 ) -> dict[str, dict[str, list[float]]]:
     """Evaluate every policy on every seed.
+
+    Args:
+        sim: The simulator.
+        policies: Policies by name.
+        seeds: Episode seeds.
+        on_decisions: Progress callback (see :func:`run_episode`); episodes replayed
+            from the journal count all their decisions at once.
+        journal: Where each finished episode is recorded as it finishes; episodes it
+            already holds (a resumed evaluation) are taken from it instead of run.
 
     Returns:
         ``{policy: {metric: [one value per seed]}}`` with every :class:`EpisodeMetrics`
@@ -77,16 +88,28 @@ def evaluate(
     for name, policy in policies.items():
         per_metric: dict[str, list[float]] = {}
         for seed in seeds:
-            start = time.perf_counter()
-            metrics = run_episode(sim, policy, int(seed), on_decisions)
-            elapsed = time.perf_counter() - start
-            for key, value in metrics.as_dict().items():
-                per_metric.setdefault(key, []).append(value)
-            per_metric.setdefault("wall_time_s", []).append(elapsed)
-            if sim.executor.collision_aware:
-                # Every collision-aware episode is validated on the checker's own code path.
-                check_schedule(sim.layout, sim.schedule(), expected_tasks=metrics.tasks_served)
-            for key, value in sim.executor.stats().items():
+            row = journal.get(name, int(seed)) if journal is not None else None
+            if row is None:
+                row = _episode(sim, policy, int(seed), on_decisions)
+                if journal is not None:
+                    journal.record(name, int(seed), row)
+            elif on_decisions is not None:
+                on_decisions(sim.config.num_tasks)
+            for key, value in row.items():
                 per_metric.setdefault(key, []).append(value)
         results[name] = per_metric
     return results
+
+
+def _episode(
+    sim: WarehouseSim, policy: SimPolicy, seed: int, on_decisions: Callable[[int], None] | None
+) -> dict[str, float]:
+    """One episode's metrics, its wall time and (collision-aware) executor statistics."""
+    start = time.perf_counter()
+    metrics = run_episode(sim, policy, seed, on_decisions)
+    row = {**metrics.as_dict(), "wall_time_s": time.perf_counter() - start}
+    if sim.executor.collision_aware:
+        # Every collision-aware episode is validated on the checker's own code path.
+        check_schedule(sim.layout, sim.schedule(), expected_tasks=metrics.tasks_served)
+    row.update(sim.executor.stats())
+    return row

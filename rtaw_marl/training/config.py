@@ -136,7 +136,12 @@ class TrainConfig(SimGroups):
         eval: Periodic greedy evaluation settings.
         imitation: The optional warm start by imitation.
         logger: ``csv``, ``tensorboard`` or ``none``.
-        resume: A checkpoint to continue from.
+        resume: A checkpoint to continue from (``last.pt``). It must hold the same
+            scenario (env, layout, navigator, tasks, eval seeds) and fewer frames
+            than ``frames``.
+        resume_new_scenario: Allow ``resume`` from a checkpoint of another scenario: its
+            networks continue here, its best TTD and evaluation history are dropped
+            (they were measured on the other scenario).
         output_dir: The run folder; ``None`` means the Hydra run folder.
         progress: Show a tqdm progress bar.
         interop: Train through TorchRL's PettingZooWrapper on the AEC env (small M).
@@ -152,6 +157,7 @@ class TrainConfig(SimGroups):
     imitation: ImitationConfig = field(default_factory=ImitationConfig)
     logger: str = "csv"
     resume: str | None = None
+    resume_new_scenario: bool = False
     output_dir: str | None = None
     progress: bool = True
     interop: bool = False

@@ -9,6 +9,7 @@ with checkpoints (last and best).
 
 from __future__ import annotations
 
+import signal
 import time
 from dataclasses import dataclass, field
 from functools import partial
@@ -27,16 +28,16 @@ from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.models.actor_critic import greedy_action, make_actor, make_critic
-from rtaw_marl.models.checkpoint import (
-    Actor,
-    Critic,
-    build_networks,
-    load_checkpoint,
-    plain_model,
-    save_checkpoint,
-)
+from rtaw_marl.models.checkpoint import Actor, Critic, build_networks
 from rtaw_marl.policies import MPDM, make_baseline
 from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.training.checkpoints import (
+    Checkpoints,
+    Progress,
+    clean_interrupted_writes,
+    resume,
+    trim_csv_logs,
+)
 from rtaw_marl.training.config import PPOConfig, TrainConfig
 from rtaw_marl.training.imitation import imitate
 from rtaw_marl.training.interop import (
@@ -47,7 +48,7 @@ from rtaw_marl.training.interop import (
     make_interop_env,
 )
 from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
-from rtaw_marl.utils.plain import as_plain
+from rtaw_marl.utils.runs import claim_folder, deferred_interrupt
 from rtaw_marl.viz.plots import plot_training_curve
 
 __all__ = ["TrainResult", "greedy_ttd", "train"]
@@ -98,32 +99,41 @@ class Clock:
         self._last = time.perf_counter()
 
 
-@dataclass
-class Progress:
-    """Where a run stands (restored on resume)."""
-
-    frames: int = 0
-    iteration: int = 0
-    best_ttd: float = float("inf")
-
-
 def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
-    """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``."""
+    """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``.
+
+    The run holds ``run_dir`` (no other run can write there meanwhile). Ctrl-C saves
+    ``last.pt`` and raises ``KeyboardInterrupt`` with a message saying how to resume.
+
+    Raises:
+        ConfigError: A config value is invalid, ``run_dir`` cannot be written, is in use,
+            or already holds a run that is not being resumed.
+    """
     _check(cfg)
     quiet_torchrl_logs()
-    run_dir = Path(run_dir)
-    if (run_dir / "checkpoints" / "last.pt").exists() and not cfg.resume:
-        raise ConfigError(
-            f"{run_dir} already holds a training run; pass "
-            f"resume={run_dir / 'checkpoints' / 'last.pt'} to continue it, or choose another "
-            "output_dir"
-        )
+    with claim_folder(run_dir) as run_dir:
+        checkpoints = run_dir / "checkpoints"
+        if (checkpoints / "last.pt").exists() and not cfg.resume:
+            raise ConfigError(
+                f"{run_dir} already holds a training run; pass "
+                f"resume={checkpoints / 'last.pt'} to continue it, or choose another "
+                "output_dir"
+            )
+        clean_interrupted_writes(checkpoints)
+        return _train(cfg, run_dir)
+
+
+def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(int(cfg.torch_threads))
     spec = cfg.sim_spec()
     keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
     learner = build_learner(cfg, keys)
-    progress, history = _resume(cfg, learner) if cfg.resume else (Progress(), [])
+    nets = (learner.actor_net, learner.critic_net)
+    progress, history = Progress(), []
+    if cfg.resume:
+        progress, history = resume(cfg, nets, learner.optim, run_dir)
+        trim_csv_logs(run_dir / "logs", progress.frames)
     evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history)
     reward_scale = cfg.algo.reward_scale or 1.0 / evaluator.env.scale
     logger = RunLogger(run_dir, cfg.logger)
@@ -135,7 +145,7 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
         sampler=SamplerWithoutReplacement(),
         batch_size=cfg.algo.minibatch_size,
     )
-    saver = Checkpoints(cfg, run_dir / "checkpoints", learner, progress)
+    saver = Checkpoints(cfg, run_dir / "checkpoints", nets, learner.optim, progress)
     bar = tqdm(total=cfg.frames, initial=progress.frames, unit="fr", disable=not cfg.progress)
     start = time.perf_counter()
 
@@ -148,40 +158,55 @@ def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     next_eval = progress.frames + cfg.eval.every_frames
     frames_at_start = progress.frames
     totals: dict[str, float] = {}
-    try:
-        if progress.frames == 0:
-            evaluate_and_save()
-        clock = Clock()
-        for data in collector:
-            clock.lap("time/collect_s")
-            progress.frames += data.numel()
-            progress.iteration += 1
-            stats = _train_step(cfg, learner, buffer, data, keys, reward_scale, progress, clock)
-            collector.update_policy_weights_()
-            clock.lap("time/sync_s")
-            done = progress.frames >= cfg.frames
-            if progress.frames >= next_eval or done:
-                next_eval += cfg.eval.every_frames
+    # Ctrl-C stops between iterations, never inside an update (see deferred_interrupt).
+    with deferred_interrupt() as stop:
+        try:
+            if progress.frames == 0:
                 evaluate_and_save()
-            clock.lap("time/eval_checkpoint_s")
-            bar.update(data.numel())
-            elapsed = time.perf_counter() - start
-            stats["charts/fps"] = (progress.frames - frames_at_start) / elapsed
-            logger.log({**stats, **clock.laps}, progress.frames)
-            for name, seconds in clock.laps.items():
-                totals[name] = totals.get(name, 0.0) + seconds
-            clock.reset()
-            if done:
-                break
-    finally:
-        collector.shutdown()
-        bar.close()
-        logger.close()
+            clock = Clock()
+            for data in collector:
+                clock.lap("time/collect_s")
+                progress.frames += data.numel()
+                progress.iteration += 1
+                stats = _train_step(cfg, learner, buffer, data, keys, reward_scale, progress, clock)
+                collector.update_policy_weights_()
+                clock.lap("time/sync_s")
+                done = progress.frames >= cfg.frames
+                if progress.frames >= next_eval or done:
+                    next_eval += cfg.eval.every_frames
+                    evaluate_and_save()
+                clock.lap("time/eval_checkpoint_s")
+                bar.update(data.numel())
+                elapsed = time.perf_counter() - start
+                stats["charts/fps"] = (progress.frames - frames_at_start) / elapsed
+                logger.log({**stats, **clock.laps}, progress.frames)
+                for name, seconds in clock.laps.items():
+                    totals[name] = totals.get(name, 0.0) + seconds
+                clock.reset()
+                if done or stop.requested:
+                    break
+        except KeyboardInterrupt:  # a second Ctrl-C: stop now, still save
+            stop.requested = True
+        finally:
+            collector.shutdown()
+            bar.close()
+            logger.close()
+    if stop.requested:
+        raise KeyboardInterrupt(_interrupted(saver, evaluator.history))
     plot_training_curve(evaluator.history, run_dir / "training_curve.png")
     return TrainResult(
         run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
         progress.best_ttd, evaluator.history, totals,
     )  # fmt: skip
+
+
+def _interrupted(saver: Checkpoints, history: list[dict[str, float]]) -> str:
+    """Save ``last.pt`` on Ctrl-C; the one-line message for the user."""
+    path = saver.save_last(history)
+    if path is None:
+        return "stopped before the first evaluation; no checkpoint was written"
+    frames = saver.progress.frames
+    return f"{path} saved at {frames} frames; continue with resume={path}"
 
 
 def _warm_start(
@@ -282,68 +307,15 @@ def build_collector(
 
 def _worker_env(spec: SimSpec, envs: int, seed: int, workers: int) -> BatchedWarehouseEnv:
     """The batched env of one collector; a worker process runs its policy on one thread
-    (torch's default, one per core, oversubscribes the cores the workers share)."""
+    (torch's default, one per core, oversubscribes the cores the workers share).
+
+    Worker processes ignore Ctrl-C: the terminal sends SIGINT to the whole process
+    group, and the main process alone must handle it (save, then shut the workers down).
+    """
     if workers > 1:
         torch.set_num_threads(1)
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     return BatchedWarehouseEnv(spec, envs, seed)
-
-
-def _resume(cfg: TrainConfig, learner: Learner) -> tuple[Progress, list[dict[str, float]]]:
-    ckpt = load_checkpoint(cfg.resume)
-    model_cfg = _plain_model(cfg)
-    if ckpt["model_config"] != model_cfg:
-        raise ConfigError(
-            f"resume: checkpoint model {ckpt['model_config']} differs from model {model_cfg}"
-        )
-    learner.actor_net.load_state_dict(ckpt["model"]["actor"])
-    learner.critic_net.load_state_dict(ckpt["model"]["critic"])
-    learner.optim.load_state_dict(ckpt["optimizer"])
-    progress = Progress(
-        int(ckpt["frames"]), int(ckpt["iteration"]), float(ckpt.get("best_ttd", float("inf")))
-    )
-    torch.manual_seed(cfg.seed + progress.iteration)
-    return progress, list(ckpt.get("history", []))
-
-
-def _plain_model(cfg: TrainConfig) -> dict[str, int | str]:
-    return plain_model(cfg.model)
-
-
-class Checkpoints:
-    """``last.pt`` after every evaluation, ``best.pt`` when the evaluation is the best yet.
-
-    Args:
-        cfg: The run's config (stored in every checkpoint).
-        folder: ``<run_dir>/checkpoints``.
-        learner: The networks and optimizer to save.
-        progress: The run's progress (frames, iteration, best TTD).
-    """
-
-    def __init__(self, cfg: TrainConfig, folder: Path, learner: Learner, progress: Progress):
-        self.cfg, self.learner, self.progress = cfg, learner, progress
-        self.last, self.best = folder / "last.pt", folder / "best.pt"
-
-    def save(self, row: dict[str, float], history: list[dict[str, float]]) -> None:
-        """Write ``last.pt`` (and ``best.pt``) with the evaluation ``row`` and every
-        evaluation so far (so a resumed run draws its whole curve)."""
-        learner, progress = self.learner, self.progress
-        payload = {
-            "model": {
-                "actor": learner.actor_net.state_dict(),
-                "critic": learner.critic_net.state_dict(),
-            },
-            "model_config": _plain_model(self.cfg),
-            "optimizer": learner.optim.state_dict(),
-            "config": as_plain(self.cfg),
-            "frames": progress.frames,
-            "iteration": progress.iteration,
-            "best_ttd": progress.best_ttd,
-            "eval": row,
-            "history": history,
-        }
-        save_checkpoint(self.last, payload)
-        if row["ttd"] <= progress.best_ttd:
-            save_checkpoint(self.best, payload)
 
 
 # --------------------------------------------------------------------------- evaluation
