@@ -14,6 +14,7 @@ import dataclasses
 import warnings
 from dataclasses import dataclass
 
+import torch
 from tensordict import TensorDictBase
 from tensordict.utils import NestedKey
 from torchrl.envs import PettingZooWrapper
@@ -22,7 +23,14 @@ from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 from rtaw_marl.envs.pettingzoo import env as warehouse_env
 from rtaw_marl.sim.builder import SimSpec
 
-__all__ = ["BATCHED_KEYS", "INTEROP_KEYS", "TrainKeys", "acting_reward", "make_interop_env"]
+__all__ = [
+    "BATCHED_KEYS",
+    "INTEROP_KEYS",
+    "TrainKeys",
+    "acting_reward",
+    "make_interop_env",
+    "standardize_acting_advantage",
+]
 
 
 @dataclass(frozen=True)
@@ -111,3 +119,19 @@ def acting_reward(data: TensorDictBase, keys: TrainKeys) -> float:
         return reward.mean().item()
     mask = data[keys.loss_mask]
     return reward.squeeze(-1)[mask].mean().item()
+
+
+def standardize_acting_advantage(data: TensorDictBase, keys: TrainKeys) -> None:
+    """Standardise the advantages of the acting rows of a batch, in place.
+
+    On the interop route every step has a row per robot and only the acting robot's
+    counts (``keys.loss_mask``). The loss's own normalisation would take the mean and
+    spread over every row, the meaningless non-acting ones included, so this route
+    standardises over the acting rows here and turns the loss's off. Non-acting rows
+    are set to 0 (the loss masks them out anyway).
+    """
+    advantage = data[keys.advantage]
+    mask = data[keys.loss_mask].unsqueeze(-1).expand_as(advantage)
+    acting = advantage[mask]
+    scale = acting.std(unbiased=False).clamp_min(1e-4) if acting.numel() > 1 else 1.0
+    data[keys.advantage] = torch.where(mask, (advantage - acting.mean()) / scale, 0.0)

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
-import numpy as np
 import torch
 from tensordict import TensorDictBase
 from torchrl.collectors import Collector, MultiSyncCollector
@@ -26,11 +25,9 @@ from tqdm import tqdm
 
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.evaluation.evaluate import evaluate
-from rtaw_marl.models.actor_critic import greedy_action, make_actor, make_critic
+from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.checkpoint import Actor, Critic, build_networks
-from rtaw_marl.policies import MPDM, make_baseline
-from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.checkpoints import (
     Checkpoints,
     Progress,
@@ -39,6 +36,7 @@ from rtaw_marl.training.checkpoints import (
     trim_csv_logs,
 )
 from rtaw_marl.training.config import PPOConfig, TrainConfig
+from rtaw_marl.training.evaluator import Evaluator, greedy_ttd
 from rtaw_marl.training.imitation import imitate
 from rtaw_marl.training.interop import (
     BATCHED_KEYS,
@@ -46,6 +44,7 @@ from rtaw_marl.training.interop import (
     TrainKeys,
     acting_reward,
     make_interop_env,
+    standardize_acting_advantage,
 )
 from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
 from rtaw_marl.utils.runs import claim_folder, deferred_interrupt
@@ -256,7 +255,8 @@ def build_learner(cfg: TrainConfig, keys: TrainKeys) -> Learner:
         entropy_coeff=algo.entropy_coeff_start,
         critic_coeff=algo.critic_coeff,
         loss_critic_type="smooth_l1",
-        normalize_advantage=algo.normalize_advantage,
+        # The interop route standardises over the acting rows itself (_update).
+        normalize_advantage=algo.normalize_advantage and keys.loss_mask is None,
     )
     shared_keys = {
         "value": keys.value,
@@ -318,63 +318,6 @@ def _worker_env(spec: SimSpec, envs: int, seed: int, workers: int) -> BatchedWar
     return BatchedWarehouseEnv(spec, envs, seed)
 
 
-# --------------------------------------------------------------------------- evaluation
-class Evaluator:
-    """Greedy evaluation on fixed selection seeds, in lockstep, against MPDM.
-
-    Args:
-        spec: The simulator spec.
-        seeds: Selection seeds (never the evaluation seeds 0-19).
-        history: Evaluations of the run so far (on resume).
-    """
-
-    def __init__(
-        self, spec: SimSpec, seeds: list[int], history: list[dict[str, float]] | None = None
-    ) -> None:
-        self.seeds = seeds
-        self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0)
-        rules = {"mpdm": MPDM(), "lookahead": make_baseline("lookahead")}
-        ttd = {name: r["ttd"] for name, r in evaluate(build_sim(spec), rules, seeds).items()}
-        self.mpdm_ttd = float(np.mean(ttd["mpdm"]))
-        # The strongest online rule, so that every curve shows the bar to clear.
-        self.lookahead_ttd = float(np.mean(ttd["lookahead"]))
-        self.history: list[dict[str, float]] = list(history or [])
-
-    def run(self, net: Actor, progress: Progress, wall_s: float) -> dict[str, float]:
-        """Evaluate ``net``, update ``progress.best_ttd`` and return the logged row."""
-        ttd = float(np.mean(greedy_ttd(net, self.env, self.seeds)))
-        progress.best_ttd = min(progress.best_ttd, ttd)
-        row = {
-            "frames": progress.frames,
-            "ttd": ttd,
-            "mpdm_ttd": self.mpdm_ttd,
-            "lookahead_ttd": self.lookahead_ttd,
-            "improvement_pct": 100.0 * (self.mpdm_ttd - ttd) / self.mpdm_ttd,
-            "wall_s": wall_s,
-        }
-        self.history.append(row)
-        return row
-
-
-@torch.no_grad()
-def greedy_ttd(net: Actor, env: BatchedWarehouseEnv, seeds: list[int]) -> list[float]:
-    """Total TTD of greedy (argmax) episodes, one per seed, run in lockstep.
-
-    Args:
-        net: The policy network.
-        env: A batched env with ``len(seeds)`` simulators.
-        seeds: Episode seeds.
-    """
-    td = env.reset_to(seeds)
-    while True:
-        td["action"] = greedy_action(net, td)
-        td = env.step(td)["next"]
-        # Every simulator takes num_tasks decisions, so all finish on the same step.
-        if bool(td["done"].all()):
-            break
-    return [env.sims[i].metrics().ttd for i in range(len(seeds))]
-
-
 # --------------------------------------------------------------------------- update
 def _train_step(
     cfg: TrainConfig,
@@ -411,6 +354,8 @@ def _update(
     data["next", keys.reward] = data["next", keys.reward] * reward_scale
     with torch.no_grad():
         learner.gae(data)
+    if keys.loss_mask is not None and algo.normalize_advantage:
+        standardize_acting_advantage(data, keys)
     buffer.extend(data.reshape(-1))
     clock.lap("time/gae_s")
     totals = {"losses/objective": 0.0, "losses/critic": 0.0, "losses/entropy": 0.0}

@@ -18,7 +18,8 @@ from rtaw_marl.models.checkpoint import (
     save_checkpoint,
 )
 from rtaw_marl.sim.builder import SimSpec
-from rtaw_marl.training.ppo import greedy_ttd, train
+from rtaw_marl.training.evaluator import greedy_ttd
+from rtaw_marl.training.ppo import train
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
 TINY = [
@@ -256,3 +257,20 @@ def test_resumed_run_keeps_its_whole_evaluation_history(train_cfg, tmp_path: Pat
     frames = [row["frames"] for row in resumed.history]
     assert frames == [0, 512, 1024, 1536, 2048]
     assert load_checkpoint(resumed.last_checkpoint)["history"] == resumed.history
+
+
+def test_interop_advantages_are_standardised_over_the_acting_rows_only() -> None:
+    """Non-acting rows (meaningless on the interop route) must not shift the statistics."""
+    from tensordict import TensorDict
+
+    from rtaw_marl.training.interop import INTEROP_KEYS, standardize_acting_advantage
+
+    mask = torch.tensor([[True, False], [False, True], [True, False]])
+    advantage = torch.tensor([[[1.0], [100.0]], [[-50.0], [3.0]], [[5.0], [7.0]]])
+    data = TensorDict({"agents": {"advantage": advantage, "mask": mask}}, batch_size=[3])
+    standardize_acting_advantage(data, INTEROP_KEYS)
+    out = data["agents", "advantage"]
+    acting = torch.tensor([1.0, 3.0, 5.0])
+    expected = (acting - acting.mean()) / acting.std(unbiased=False)
+    assert torch.allclose(out.squeeze(-1)[mask], expected)
+    assert (out.squeeze(-1)[~mask] == 0).all()
