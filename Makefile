@@ -9,7 +9,8 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	# torch is pinned exactly: the local CPU wheel, never a multi-GB CUDA build.
+	# .[dev] = the env, the cli and train extras, the test tools. torch is capped (<2.14):
+	# the local CPU wheel, never a new multi-GB CUDA build.
 	$(BIN)/pip install --quiet -e ".[dev]"
 	touch $(STAMP)
 

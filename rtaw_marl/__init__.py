@@ -5,6 +5,8 @@ package loads neither torch nor PettingZoo; the env registers itself with Pettin
 ``rtaw/warehouse-v0`` when :mod:`rtaw_marl.envs.pettingzoo` is imported (``from
 rtaw_marl import warehouse_v0`` does that), and at once if PettingZoo is already loaded,
 so ``import pettingzoo, rtaw_marl; pettingzoo.make("aec", "rtaw/warehouse-v0")`` works.
+PettingZoo has that registry from 1.27 on; with an earlier PettingZoo (>= 1.25, e.g. beside
+AgileRL) the env works the same and registration is skipped.
 """
 
 from __future__ import annotations
@@ -17,8 +19,12 @@ ENV_ID = "rtaw/warehouse-v0"
 
 
 def register_envs() -> None:
-    """Register ``rtaw/warehouse-v0`` in PettingZoo's AEC registry (idempotent)."""
-    from pettingzoo.env_registry.registration import aec_registry, register
+    """Register ``rtaw/warehouse-v0`` in PettingZoo's AEC registry (idempotent; a no-op
+    before PettingZoo 1.27, which has no registry)."""
+    try:
+        from pettingzoo.env_registry.registration import aec_registry, register
+    except ImportError:
+        return
 
     if ENV_ID not in aec_registry:
         register("aec", ENV_ID, entry_point="rtaw_marl.envs.pettingzoo:env")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +20,7 @@ LAYERS = {
     "rtaw_marl.sim": 1,
     "rtaw_marl.envs": 2,
     "rtaw_marl.warehouse_v0": 2,
+    "rtaw_marl.warehouse_v1": 2,
     "rtaw_marl.models": 3,
     "rtaw_marl.policies": 4,
     "rtaw_marl.evaluation": 5,
@@ -96,6 +98,68 @@ def test_no_import_cycles_between_modules() -> None:
     assert not cycles, cycles
 
 
+#: Modules installed only by the ``cli`` and ``train`` extras (pyproject.toml).
+EXTRAS = ("torch", "torchrl", "tensordict", "hydra", "omegaconf", "tqdm", "matplotlib", "PIL")
+
+#: What ``pip install rtaw_marl`` (no extras) installs: import name -> distribution.
+BASE_DEPENDENCIES = {
+    "numpy": "numpy",
+    "scipy": "scipy",
+    "numba": "numba",
+    "gymnasium": "gymnasium",
+    "pettingzoo": "pettingzoo",
+}
+
+#: The parts of the package that ``pip install rtaw_marl`` must run: the env, the simulator
+#: and the hand-written policies (everything else needs an extra).
+ENV_PATH = ("__init__.py", "errors.py", "warehouse_v*.py", "utils", "sim", "envs", "policies")
+NEEDS_EXTRA = ("envs/torchrl.py", "policies/network.py")
+
+
+def _env_path_files() -> list[Path]:
+    files: list[Path] = []
+    for pattern in ENV_PATH:
+        for path in sorted(PACKAGE.glob(pattern)):
+            files += sorted(path.rglob("*.py")) if path.is_dir() else [path]
+    return [f for f in files if f.relative_to(PACKAGE).as_posix() not in NEEDS_EXTRA]
+
+
+def _third_party(path: Path) -> set[str]:
+    """Top-level names of the non-stdlib, non-rtaw_marl modules ``path`` imports anywhere."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {a.name.partition(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module.partition(".")[0])
+    return {n for n in names if n not in sys.stdlib_module_names and n != "rtaw_marl"}
+
+
+def test_env_path_imports_only_the_base_dependencies() -> None:
+    """Function bodies too: a lazy ``import torch`` in the env would break an env-only
+    install as surely as a top-level one."""
+    files = _env_path_files()
+    assert PACKAGE / "envs" / "pettingzoo.py" in files
+    stray = {
+        f"{f.relative_to(PACKAGE)}: {name}"
+        for f in files
+        for name in _third_party(f) - set(BASE_DEPENDENCIES)
+    }
+    assert not stray, sorted(stray)
+
+
+def test_base_dependencies_are_ranges_of_exactly_the_env_needs() -> None:
+    tomllib = pytest.importorskip("tomllib")
+    project = tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())["project"]
+    requirements = project["dependencies"]
+    names = {re.split(r"[<>=!~\[; ]", r, maxsplit=1)[0].lower() for r in requirements}
+    assert names == set(BASE_DEPENDENCIES.values())
+    assert not [r for r in requirements if "==" in r], "exact pins belong in the extras"
+    train = " ".join(project["optional-dependencies"]["train"])
+    assert all(m in train for m in ("torch", "tensordict", "torchrl", "rtaw_marl[cli]"))
+    assert "rtaw_marl[train]" in project["optional-dependencies"]["dev"]
+
+
 @pytest.mark.parametrize(
     ("module", "absent"),
     [
@@ -103,12 +167,16 @@ def test_no_import_cycles_between_modules() -> None:
         ("rtaw_marl.sim", ("torch", "pettingzoo", "hydra")),
         ("rtaw_marl.sim.builder", ("torch", "pettingzoo", "hydra", "omegaconf")),
         ("rtaw_marl.sim.mapf", ("torch", "pettingzoo", "hydra")),
-        ("rtaw_marl.envs.pettingzoo", ("torch", "torchrl", "hydra")),
+        ("rtaw_marl.envs.pettingzoo", EXTRAS),
+        ("rtaw_marl.policies", EXTRAS),
+        ("rtaw_marl.cli", (*EXTRAS, "pettingzoo", "numpy")),
+        ("rtaw_marl.evaluation", ("torch", "torchrl", "tensordict", "hydra")),
         ("rtaw_marl.config", ("torch", "torchrl")),
     ],
 )
 def test_light_imports_stay_light(module: str, absent: tuple[str, ...]) -> None:
-    """Importing the simulator loads no torch; the env loads no torch; configs no torch."""
+    """Importing the simulator loads no torch; the env and the hand-written policies load
+    nothing of the extras; configs no torch; the console-script wrappers only the stdlib."""
     code = f"import sys, {module}; print(sorted(m for m in {absent!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

@@ -147,9 +147,15 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
                 name, navigator=sim.navigator, scale=sim.layout.scale, params=cfg.baselines
             )
             continue
-        import torch
+        try:
+            import torch
 
-        from rtaw_marl.policies.network import load_policy
+            from rtaw_marl.policies.network import load_policy
+        except ModuleNotFoundError as exc:  # an install without the train extra
+            raise ConfigError(
+                f"policy={name} needs the training extra ({exc.name!r} is not installed): "
+                "pip install 'rtaw_marl[train]'"
+            ) from None
         from rtaw_marl.policies.pretrained.registry import pretrained_path
 
         torch.set_num_threads(int(cfg.torch_threads))
