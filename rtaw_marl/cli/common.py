@@ -18,7 +18,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
-from rtaw_marl.config import CONF_DIR, config_error, register_configs, to_typed
+from rtaw_marl.config import CONF_DIR, check_overrides, config_error, register_configs, to_typed
 from rtaw_marl.errors import ConfigError, RtawError
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
@@ -38,8 +38,17 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
     and exits 130.
     """
     register_configs()
+
+    @exit_on_user_error
+    @wraps(task)
+    def checked(cfg: DictConfig) -> Any:
+        # Inside the job Hydra's config holds this job's own overrides (one per job of
+        # a sweep): a boolean key given "off" or "1" is refused before the task runs.
+        check_overrides(cfg, HydraConfig.get().overrides.task)
+        return task(cfg)
+
     hydra_main = hydra.main(config_path=str(CONF_DIR), config_name=config_name, version_base="1.3")(
-        task
+        checked
     )
 
     def main() -> None:

@@ -9,13 +9,21 @@
 
 from __future__ import annotations
 
-from rtaw_marl.config.convert import CONF_DIR, as_plain, compose, config_error, to_typed
+from rtaw_marl.config.convert import (
+    CONF_DIR,
+    as_plain,
+    check_overrides,
+    compose,
+    config_error,
+    to_typed,
+)
 from rtaw_marl.config.store import GROUPS, register_configs
 
 __all__ = [
     "CONF_DIR",
     "GROUPS",
     "as_plain",
+    "check_overrides",
     "compose",
     "config_error",
     "register_configs",

@@ -3,20 +3,22 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from hydra import compose as hydra_compose
 from hydra import initialize_config_dir
+from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.errors import HydraException, MissingConfigException
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import BooleanNode, DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from rtaw_marl.config.store import register_configs
 from rtaw_marl.errors import ConfigError, RtawError
 from rtaw_marl.utils.plain import as_plain
 
-__all__ = ["CONF_DIR", "as_plain", "compose", "config_error", "to_typed"]
+__all__ = ["CONF_DIR", "as_plain", "check_overrides", "compose", "config_error", "to_typed"]
 
 #: The packaged Hydra config folder (``rtaw_marl/conf``).
 CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
@@ -36,13 +38,50 @@ def compose(
     register_configs()
     try:
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-            return hydra_compose(
+            cfg = hydra_compose(
                 config_name=config_name,
                 overrides=list(overrides),
                 return_hydra_config=return_hydra_config,
             )
     except (HydraException, OmegaConfBaseException) as exc:
         raise config_error(exc) from exc
+    check_overrides(cfg, overrides)
+    return cfg
+
+
+def check_overrides(cfg: DictConfig, overrides: Sequence[str]) -> None:
+    """Refuse a boolean key given anything but ``true`` or ``false``.
+
+    OmegaConf reads ``yes``/``no``/``on``/``off``/``1``/``0`` into a ``bool`` field, so
+    ``lower_bound=off`` or ``progress=2`` would silently pick a side; once composed the
+    word is gone, so the overrides themselves are checked (Hydra parses ``true`` and
+    ``false``, in any case, as real booleans).
+
+    Args:
+        cfg: The composed config.
+        overrides: The command-line overrides it was composed with.
+
+    Raises:
+        ConfigError: A boolean key was given another value; the message names it.
+    """
+    try:
+        parsed = OverridesParser.create().parse_overrides(list(overrides))
+    except HydraException:
+        return  # Hydra has already accepted them; nothing to add
+    for override in parsed:
+        if override.is_delete() or override.is_sweep_override():
+            continue
+        key, value = override.key_or_group, override.value()
+        if value is None or isinstance(value, bool) or key.startswith("hydra."):
+            continue
+        if isinstance(value, str) and "${" in value:
+            continue  # an interpolation: its result is typed when it resolves
+        parent_key, _, leaf = key.rpartition(".")
+        parent = OmegaConf.select(cfg, parent_key) if parent_key else cfg
+        if not isinstance(parent, DictConfig) or leaf not in parent:
+            continue  # a group choice (scenario=poc), a list item, a hydra key
+        if isinstance(parent._get_node(leaf), BooleanNode):
+            raise ConfigError(f"{key} must be true or false, got {value!r}")
 
 
 def to_typed(cfg: DictConfig) -> Any:
@@ -71,9 +110,8 @@ def _check_keys(node: DictConfig, prefix: str) -> None:
         valid = [f.name for f in dataclasses.fields(schema)]
         for key in node:
             if key not in valid:
-                raise ConfigError(
-                    f"unknown config key '{prefix}{key}'; valid keys there: {', '.join(valid)}"
-                )
+                listing = _settable(schema, prefix.rstrip("."))  # type: ignore[arg-type]
+                raise ConfigError(f"unknown config key '{prefix}{key}'; {listing}")
     for key in node:
         child = node._get_node(key)
         if isinstance(child, DictConfig) and not child._is_missing() and not child._is_none():
@@ -102,15 +140,23 @@ def config_error(exc: BaseException) -> RtawError:
         first = f"{first} {lines[1]}"
     key = getattr(cause, "full_key", None)
     if isinstance(cause, OmegaConfBaseException) and key:
-        valid = _valid_keys(cause)
-        if "not in" in first and valid:
-            return ConfigError(f"unknown config key {key!r}; valid keys there: {valid}")
+        object_type = getattr(cause, "object_type", None)
+        if "not in" in first and dataclasses.is_dataclass(object_type):
+            listing = _settable(object_type, key.rpartition(".")[0])  # type: ignore[arg-type]
+            return ConfigError(f"unknown config key {key!r}; {listing}")
         return ConfigError(f"config key {key!r}: {first}")
     return ConfigError(first)
 
 
-def _valid_keys(exc: OmegaConfBaseException) -> str:
-    object_type = getattr(exc, "object_type", None)
-    if object_type is not None and dataclasses.is_dataclass(object_type):
-        return ", ".join(f.name for f in dataclasses.fields(object_type))
-    return ""
+def _settable(schema: type, group: str) -> str:
+    """The keys a user can set on ``schema`` (at ``group``), for an unknown-key message.
+
+    An option's ``name`` is fixed by the option (``navigator=cbs`` chooses it), so it is
+    not offered; an option with nothing else to set says so.
+    """
+    keys = [f.name for f in dataclasses.fields(schema) if f.name != "name"]  # type: ignore[arg-type]
+    if keys:
+        return f"valid keys there: {', '.join(keys)}"
+    name = getattr(schema, "__dataclass_fields__", {}).get("name")
+    option = f"{group}={name.default}" if group and name is not None else group or "this config"
+    return f"{option} takes no keys"

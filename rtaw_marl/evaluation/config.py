@@ -6,8 +6,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.sim.builder import SimGroups
+from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.utils.checks import at_least, check_fields
 
 __all__ = ["EvalConfig", "RenderConfig"]
 
@@ -49,6 +52,18 @@ class EvalConfig(SimGroups):
     torch_threads: int = 1
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
 
+    def __post_init__(self) -> None:
+        check_fields(self)
+        at_least(self, "", 1, "torch_threads")
+        seeds = self.seeds
+        if isinstance(seeds, (list, tuple)):
+            if not seeds:
+                raise ConfigError("seeds must name at least one seed")
+            for i, seed in enumerate(seeds):
+                seed_value(seed, f"seeds[{i}]")
+        else:
+            seed_value(seeds, "seeds")
+
 
 @dataclass(kw_only=True)
 class RenderConfig(SimGroups):
@@ -83,3 +98,13 @@ class RenderConfig(SimGroups):
     cell_px: int | None = None
     torch_threads: int = 1
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        seed_value(self.seed, "seed")
+        at_least(self, "", 1, "fps", "every", "max_frames", "torch_threads")
+        at_least(self, "", 0, "start")
+        if self.stop is not None:
+            at_least(self, "", 0, "stop")
+        if self.cell_px is not None:
+            at_least(self, "", 1, "cell_px")

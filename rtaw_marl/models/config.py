@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from rtaw_marl.utils.checks import check_fields
+
 __all__ = ["MODELS", "RIVAL_DIM", "ModelConfig", "RTAWConfig", "RTAWPlusConfig"]
 
 #: Width of RTAW+'s rival keys and values (fixed: the rival tokens dominate its cost).
@@ -67,6 +69,7 @@ class RTAWPlusConfig:
 def _check_sizes(config: object, keys: tuple[str, ...]) -> None:
     from rtaw_marl.errors import ConfigError
 
+    check_fields(config, "model.")
     for key in keys:
         value = getattr(config, key)
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:

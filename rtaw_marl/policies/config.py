@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.utils.checks import check_fields
 
 __all__ = ["BaselinesConfig"]
 
@@ -24,6 +25,7 @@ class BaselinesConfig:
     hindsight_horizon: int = 30
 
     def __post_init__(self) -> None:
+        check_fields(self, "baselines.")
         for key, low in (("lookahead_horizon", 0), ("hindsight_horizon", 0)):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:

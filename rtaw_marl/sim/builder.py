@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.budget import check_memory
 from rtaw_marl.sim.config import SimBuffers, SimConfig
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import Layout
@@ -23,6 +24,7 @@ from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.options import (
     AStarConfig,
     DesignatedTasksConfig,
+    DirectConfig,
     LayoutOption,
     NavigatorOption,
     ShelvesLayoutConfig,
@@ -112,9 +114,19 @@ class SimFactory:
 
     def __init__(self, spec: SimSpec) -> None:
         self.spec = spec
+        # Checked before anything is allocated: a generated layout's size is known up
+        # front, a file's once it is read (its size is bounded by the file's).
+        size = spec.layout.size()
+        if size is not None:
+            self._check_memory(*size, name=spec.layout.name)
         self.layout: Layout = spec.layout.build()
+        self._check_memory(self.layout.width, self.layout.height, name=self.layout.name)
         self.navigator: Navigator = spec.navigator.navigator(self.layout)
         self.tasks: TaskStream = spec.tasks.build()
+
+    def _check_memory(self, width: int, height: int, name: str) -> None:
+        fields = not isinstance(self.spec.navigator, DirectConfig)
+        check_memory(self.spec.env, width, height, fields, name)
 
     def __call__(self, buffers: SimBuffers | None = None) -> WarehouseSim:
         """A new simulator, optionally writing its state into shared ``buffers``."""

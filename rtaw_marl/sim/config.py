@@ -8,6 +8,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.layout import MAX_COORDINATE
+from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
 __all__ = ["EPISODE_MODES", "REWARDS", "SimBuffers", "SimConfig"]
 
@@ -25,8 +27,10 @@ class SimConfig:
         num_tasks: Tasks served (``drain``) or decisions taken (``paper``) per episode.
         queue_len: ``N``, the number of visible queued tasks, at least 1.
         episode_mode: ``"drain"`` or ``"paper"``.
-        noise_mean: Mean of the Gaussian noise added to completion times (seconds).
-        noise_var: Its variance; 0 makes the dynamics deterministic.
+        noise_mean: Mean of the Gaussian noise added to completion times (seconds),
+            at least 0: a delay on top of the travel time (single draws below 0 end a
+            task no earlier than its decision).
+        noise_var: Its variance, at least 0; 0 makes the dynamics deterministic.
         reward: ``"ttd"`` (default), ``"length"`` or ``"ttd_length"``.
         robot_starts: ``(x, y)`` start cell per robot; random distinct free cells from
             the episode seed when ``None``.
@@ -44,13 +48,8 @@ class SimConfig:
     robot_free_times: list[float] | None = None
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name in ("num_robots", "num_tasks", "queue_len"):
-                if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-                    raise ConfigError(f"env.{f.name} must be an integer, got {value!r}")
-                if value < 1:
-                    raise ConfigError(f"env.{f.name} must be >= 1, got {value}")
+        check_fields(self, "env.")
+        at_least(self, "env.", 1, "num_robots", "num_tasks", "queue_len")
         if self.episode_mode not in EPISODE_MODES:
             raise ConfigError(
                 f"env.episode_mode must be one of {', '.join(EPISODE_MODES)}, "
@@ -60,10 +59,11 @@ class SimConfig:
             raise ConfigError(
                 f"env.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}"
             )
-        if not self.noise_var >= 0:
-            raise ConfigError(f"env.noise_var must be >= 0, got {self.noise_var}")
-        if not np.isfinite(self.noise_mean):
-            raise ConfigError(f"env.noise_mean must be finite, got {self.noise_mean}")
+        check_number("env.noise_var", self.noise_var, minimum=0)
+        # The noise is a delay on top of the shortest travel time: a robot cannot beat
+        # its shortest path on average, and a negative mean would end tasks at their
+        # decision time (a makespan of 0 for noise_mean=-100).
+        check_number("env.noise_mean", self.noise_mean, minimum=0)
         if self.robot_starts is not None:
             starts = tuple(tuple(s) for s in self.robot_starts)
             if len(starts) != self.num_robots or any(len(s) != 2 for s in starts):
@@ -71,10 +71,13 @@ class SimConfig:
                     f"env.robot_starts must hold num_robots={self.num_robots} [x, y] pairs, "
                     f"got {len(starts)} entries"
                 )
+            far = [v for s in starts for v in s if abs(v) > MAX_COORDINATE]
+            if far:
+                raise ConfigError(f"env.robot_starts: coordinate {far[0]} is out of range")
             object.__setattr__(self, "robot_starts", starts)
         if self.robot_free_times is not None:
             times = tuple(float(t) for t in self.robot_free_times)
-            if len(times) != self.num_robots or not all(np.isfinite(t) and t >= 0 for t in times):
+            if len(times) != self.num_robots or not all(t >= 0 for t in times):
                 raise ConfigError(
                     f"env.robot_free_times must hold num_robots={self.num_robots} finite "
                     "non-negative times"

@@ -219,8 +219,10 @@ class WarehouseSim:
         else:
             cells = self.layout.main_cells
             starts = cells[start_rng.choice(len(cells), size=self.num_robots, replace=False)]
+        k, kinds = len(tasks), ("origin of task", "destination of task", "start of robot")
         self.navigator.check_connected(
-            np.concatenate([tasks[:, :2], tasks[:, 2:], starts]), "cell (tasks, then robots)"
+            np.concatenate([tasks[:, :2], tasks[:, 2:], starts]),
+            lambda i: f"{kinds[min(i // k, 2)]} {i - min(i // k, 2) * k}",
         )
         return tasks, starts
 

@@ -13,6 +13,9 @@ Supported files:
   lines of ``W`` characters; ``@``, ``T``, ``O`` and ``W`` are blocked, every other
   character is free.
 * ASCII ``.txt``/``.grid``: rows of ``.`` (free) and ``@`` (blocked), no header.
+
+Any other extension is an error naming these (:data:`LAYOUT_FORMATS`), rather than a
+MovingAI ``.scen`` or a JSON file misread as an ASCII map.
 """
 
 from __future__ import annotations
@@ -26,7 +29,27 @@ from scipy import ndimage
 
 from rtaw_marl.errors import LayoutError
 
-__all__ = ["Layout", "load_layout", "open_grid", "shelf_grid"]
+__all__ = [
+    "LAYOUT_FORMATS",
+    "MAX_COORDINATE",
+    "Layout",
+    "check_sizes",
+    "load_layout",
+    "open_grid",
+    "shelf_grid",
+]
+
+#: Largest coordinate a task or a robot start may name: no grid is that large, and
+#: ``int64`` arithmetic on cells stays exact (a cast would wrap a larger value silently).
+MAX_COORDINATE = 2**31 - 1
+
+#: Layout file formats by extension (the loader picks its parser from the extension).
+LAYOUT_FORMATS = {
+    ".cfg": "SBPL",
+    ".map": "MovingAI",
+    ".txt": "ASCII",
+    ".grid": "ASCII",
+}
 
 _BLOCKED_MAP_CHARS = frozenset("@TOW")
 _FOUR_CONNECTED = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
@@ -201,8 +224,7 @@ class Layout:
 
 def open_grid(width: int, height: int) -> Layout:
     """An obstacle-free ``width x height`` grid (the paper's "Direct" setting)."""
-    if int(width) < 1 or int(height) < 1:
-        raise LayoutError(f"open grid size must be at least 1x1, got {width}x{height}")
+    check_sizes(width=width, height=height)
     return Layout(np.zeros((int(height), int(width)), dtype=bool), name=f"open_{width}x{height}")
 
 
@@ -220,11 +242,14 @@ def shelf_grid(
     between them, leaving a free ``margin`` along every edge, so all free cells are
     connected. Deterministic from its parameters.
     """
-    for key, value in (("shelf_width", shelf_width), ("shelf_height", shelf_height)):
-        if int(value) < 1:
-            raise LayoutError(f"layout.{key} must be >= 1, got {value}")
-    if int(aisle) < 1 or int(margin) < 1:
-        raise LayoutError(f"layout.aisle and layout.margin must be >= 1, got {aisle}, {margin}")
+    check_sizes(
+        width=width,
+        height=height,
+        shelf_width=shelf_width,
+        shelf_height=shelf_height,
+        aisle=aisle,
+        margin=margin,
+    )
     grid = np.zeros((int(height), int(width)), dtype=bool)
     # Centre the block pattern so the margins on opposite edges differ by at most one cell.
     nx = max(0, (width - 2 * margin + aisle) // (shelf_width + aisle))
@@ -239,20 +264,41 @@ def shelf_grid(
     return Layout(grid, name=f"shelves_{width}x{height}")
 
 
-def load_layout(path: str | Path) -> Layout:
-    """Load a layout file, choosing the parser by extension (``.cfg``, ``.map``, else ASCII).
+def check_sizes(minimum: int = 1, **sizes: object) -> None:
+    """Check generator parameters: integers (``10.7`` is not silently built as ``10``)
+    and at least ``minimum``.
 
     Raises:
-        LayoutError: The file is missing or malformed.
+        LayoutError: A size is not an integer or is below ``minimum``; names the key.
+    """
+    for key, value in sizes.items():
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            raise LayoutError(f"layout.{key} must be an integer, got {value!r}")
+        if value < minimum:
+            raise LayoutError(f"layout.{key} must be >= {minimum}, got {value}")
+
+
+def load_layout(path: str | Path) -> Layout:
+    """Load a layout file, choosing the parser by extension (:data:`LAYOUT_FORMATS`:
+    ``.cfg``, ``.map``, ``.txt``/``.grid`` ASCII).
+
+    Raises:
+        LayoutError: The file is missing, its extension names no known format (a
+            ``.scen`` or ``.json`` file is not read as an ASCII map), or it is malformed.
     """
     path = Path(path)
     if not path.is_file():
         raise LayoutError(f"layout file not found: {path}")
+    suffix = path.suffix.lower()
+    if suffix not in LAYOUT_FORMATS:
+        known = ", ".join(f"{ext} ({kind})" for ext, kind in LAYOUT_FORMATS.items())
+        raise LayoutError(
+            f"{path}: unknown layout format {suffix or '(no extension)'!r}; known: {known}"
+        )
     try:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as exc:
         raise LayoutError(f"cannot read layout file {path}: {exc}") from exc
-    suffix = path.suffix.lower()
     if suffix == ".cfg":
         grid = _parse_cfg(text, path)
     elif suffix == ".map":

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections import OrderedDict
+from collections.abc import Callable
 
 import numpy as np
 
@@ -84,10 +85,15 @@ class Navigator(ABC):
     def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
         """Cells ``int64 [L, 2]`` visited from ``a`` to ``b``, both ends included."""
 
-    def check_connected(self, cells: np.ndarray, what: str) -> None:
+    def check_connected(self, cells: np.ndarray, what: str | Callable[[int], str]) -> None:
         """Raise :class:`LayoutError` unless all ``cells [K, 2]`` are mutually reachable.
 
         The base navigator ignores obstacles, so every pair is reachable.
+
+        Args:
+            cells: ``(x, y)`` rows.
+            what: How to name cell ``i`` in the message: a word (``"cell"`` gives
+                ``cell 3``) or a function of ``i`` (``origin of task 1``).
         """
         del cells, what
 
@@ -240,18 +246,25 @@ class AStarNavigator(Navigator):
         cells_arr = np.asarray(cells)
         return np.stack([cells_arr % self._wp - 1, cells_arr // self._wp - 1], axis=1)
 
-    def check_connected(self, cells: np.ndarray, what: str) -> None:
+    def check_connected(self, cells: np.ndarray, what: str | Callable[[int], str]) -> None:
         cells = np.asarray(cells, dtype=np.int64).reshape(-1, 2)
         if cells.size == 0 or self.layout.num_components == 1:
             return
         labels = self.layout.component_labels[cells[:, 1], cells[:, 0]]
-        bad = np.flatnonzero(labels != labels[0])
+        # Blame the cells outside the region most of them share (ties: the larger
+        # region), not every cell but the first: a walled-in first task must not make
+        # all the others look unreachable.
+        regions, counts = np.unique(labels, return_counts=True)
+        sizes = np.bincount(self.layout.component_labels.ravel())[regions]
+        main = regions[np.lexsort((sizes, counts))[-1]]
+        bad = np.flatnonzero(labels != main)
         if bad.size:
-            i = int(bad[0])
+            i, j = int(bad[0]), int(np.flatnonzero(labels == main)[0])
+            name = what(i) if callable(what) else f"{what} {i}"
             raise LayoutError(
-                f"{what} {i} at (x={int(cells[i, 0])}, y={int(cells[i, 1])}) cannot be reached "
-                f"from (x={int(cells[0, 0])}, y={int(cells[0, 1])}) on layout "
-                f"{self.layout.name!r}: they lie in different connected regions"
+                f"{name} at (x={int(cells[i, 0])}, y={int(cells[i, 1])}) cannot be reached "
+                f"from the other cells, e.g. (x={int(cells[j, 0])}, y={int(cells[j, 1])}), on "
+                f"layout {self.layout.name!r}: they lie in different connected regions"
             )
 
     def _checked(self, d: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

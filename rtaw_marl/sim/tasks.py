@@ -35,7 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, TaskFileError
-from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.layout import MAX_COORDINATE, Layout
+from rtaw_marl.utils.checks import check_number
 
 __all__ = [
     "DEFAULT_CENTRES",
@@ -118,8 +119,7 @@ class DesignatedTasks(TaskStream):
     ) -> None:
         self.pickup_centres = _centres(pickup_centres, "pickup_centres")
         self.delivery_centres = _centres(delivery_centres, "delivery_centres")
-        if not sigma > 0:
-            raise ConfigError(f"tasks.sigma must be > 0, got {sigma}")
+        check_number("tasks.sigma", sigma, above=0)
         self.sigma = float(sigma)
 
     def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
@@ -186,10 +186,11 @@ class ClusteredTasks(TaskStream):
     """
 
     def __init__(self, num_clusters: int, sigma: float) -> None:
-        if int(num_clusters) < 1:
+        if isinstance(num_clusters, bool) or not isinstance(num_clusters, (int, np.integer)):
+            raise ConfigError(f"tasks.num_clusters must be an integer, got {num_clusters!r}")
+        if num_clusters < 1:
             raise ConfigError(f"tasks.num_clusters must be >= 1, got {num_clusters}")
-        if not sigma > 0:
-            raise ConfigError(f"tasks.sigma must be > 0, got {sigma}")
+        check_number("tasks.sigma", sigma, above=0)
         self.num_clusters = int(num_clusters)
         self.sigma = float(sigma)
 
@@ -234,12 +235,7 @@ class FixedTasks(TaskStream):
         refill_same_slot: bool = False,
         name: str = "task list",
     ) -> None:
-        arr = np.asarray(tasks, dtype=np.float64)
-        if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) == 0:
-            raise TaskFileError(f"{name}: expected a non-empty list of (ox, oy, dx, dy) rows")
-        if not np.array_equal(arr, np.round(arr)):
-            raise TaskFileError(f"{name}: task coordinates must be integers")
-        self.tasks = arr.astype(np.int64)
+        self.tasks = _task_array(tasks, name)
         self.refill_same_slot = refill_same_slot
         self.max_tasks = None if refill_same_slot else len(self.tasks)
         self.name = name
@@ -258,37 +254,102 @@ class FixedTasks(TaskStream):
 
 
 def load_task_csv(path: str | Path) -> FixedTasks:
-    """Read a task list from a CSV file with header ``ox,oy,dx,dy``.
+    """Read a task list from a CSV file with header ``ox,oy,dx,dy`` (UTF-8; a leading
+    byte-order mark, as spreadsheet programs write, is allowed).
 
     Raises:
-        TaskFileError: The file is missing, has no such header, or a row is malformed.
+        TaskFileError: The file is missing, is not UTF-8 text or not CSV, has no such
+            header, or a row is malformed or out of range.
     """
     path = Path(path)
     if not path.is_file():
         raise TaskFileError(f"task file not found: {path}")
-    with path.open(newline="") as fh:
-        reader = csv.reader(fh)
-        header = [h.strip().lower() for h in next(reader, [])]
-        if header != ["ox", "oy", "dx", "dy"]:
-            raise TaskFileError(f"{path}: first line must be the header 'ox,oy,dx,dy'")
-        rows = []
-        for lineno, row in enumerate(reader, start=2):
-            if not any(cell.strip() for cell in row):
-                continue
-            try:
-                values = [int(cell) for cell in row]
-            except ValueError:
-                raise TaskFileError(f"{path}:{lineno}: expected 4 integers, got {row}") from None
-            if len(values) != 4:
-                raise TaskFileError(f"{path}:{lineno}: expected 4 integers, got {row}")
-            rows.append(values)
+    rows: list[list[int]] = []
+    lineno = 1
+    try:
+        # utf-8-sig drops a byte-order mark, which would otherwise glue onto "ox".
+        with path.open(encoding="utf-8-sig", newline="") as fh:
+            reader = csv.reader(fh)
+            first = next(reader, [])
+            header = [h.strip().lower() for h in first]
+            if header != ["ox", "oy", "dx", "dy"]:
+                got = ",".join(first)
+                raise TaskFileError(
+                    f"{path}: first line must be the header 'ox,oy,dx,dy', got {got[:40]!r}"
+                )
+            for row in reader:
+                lineno = reader.line_num
+                if any(cell.strip() for cell in row):
+                    rows.append(_task_row(row, f"{path}:{lineno}"))
+    except UnicodeDecodeError as exc:
+        raise TaskFileError(
+            f"{path}: not a UTF-8 text file (byte 0x{exc.object[exc.start]:02x} cannot be "
+            "decoded); expected a CSV with header 'ox,oy,dx,dy'"
+        ) from None
+    except csv.Error as exc:
+        raise TaskFileError(f"{path}:{lineno + 1}: not a task CSV ({exc})") from None
     if not rows:
         raise TaskFileError(f"{path}: no tasks")
     return FixedTasks(rows, name=str(path))
 
 
+def _task_row(row: list[str], where: str) -> list[int]:
+    """One CSV row as 4 integer coordinates, each within :data:`MAX_COORDINATE`."""
+    try:
+        values = [int(cell) for cell in row]
+    except ValueError:
+        raise TaskFileError(f"{where}: expected 4 integers, got {row}") from None
+    if len(values) != 4:
+        raise TaskFileError(f"{where}: expected 4 integers, got {row}")
+    for value in values:
+        if abs(value) > MAX_COORDINATE:
+            raise TaskFileError(
+                f"{where}: coordinate {value} is out of range (|value| <= {MAX_COORDINATE})"
+            )
+    return values
+
+
+def _task_array(tasks: Sequence[Sequence[int]] | np.ndarray, name: str) -> np.ndarray:
+    """``tasks`` as ``int64 [K, 4]``, refusing non-integers and coordinates past
+    :data:`MAX_COORDINATE` (which a cast to ``int64`` would otherwise wrap silently)."""
+    try:
+        arr = np.asarray(tasks)
+    except ValueError:  # ragged rows
+        arr = np.empty(0)
+    if arr.ndim != 2 or arr.shape[1] != 4 or len(arr) == 0:
+        raise TaskFileError(f"{name}: expected a non-empty list of (ox, oy, dx, dy) rows")
+    if arr.dtype.kind not in "iufO":
+        raise TaskFileError(f"{name}: task coordinates must be integers, got {arr.dtype}")
+    if arr.dtype.kind == "O":
+        # Python ints past int64 land here: compare them exactly, one by one.
+        for i, value in enumerate(arr.ravel().tolist()):
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise TaskFileError(f"{name}: task {i // 4} coordinate {value!r} is not a number")
+            if abs(value) > MAX_COORDINATE:
+                raise TaskFileError(
+                    f"{name}: task {i // 4} coordinate {value} is out of range "
+                    f"(|value| <= {MAX_COORDINATE})"
+                )
+        arr = arr.astype(np.float64)
+    if arr.dtype.kind == "f" and not (np.isfinite(arr).all() and (arr == np.round(arr)).all()):
+        raise TaskFileError(f"{name}: task coordinates must be integers")
+    outside = np.flatnonzero(np.abs(arr.ravel()) > MAX_COORDINATE)
+    if outside.size:
+        i = int(outside[0])
+        raise TaskFileError(
+            f"{name}: task {i // 4} coordinate {arr.ravel()[i]:.0f} is out of range "
+            f"(|value| <= {MAX_COORDINATE})"
+        )
+    return arr.astype(np.int64)
+
+
 def _centres(centres: Sequence[Sequence[float]], key: str) -> np.ndarray:
-    arr = np.asarray(centres, dtype=np.float64)
+    try:
+        arr = np.asarray(centres, dtype=np.float64)
+    except (TypeError, ValueError):
+        arr = np.empty(0)
     if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0:
         raise ConfigError(f"tasks.{key} must be a non-empty list of [x, y] pairs")
+    if not np.isfinite(arr).all():
+        raise ConfigError(f"tasks.{key} must hold finite numbers, got {arr.tolist()}")
     return arr

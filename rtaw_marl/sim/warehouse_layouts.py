@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from rtaw_marl.errors import LayoutError
-from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.layout import Layout, check_sizes
 
 __all__ = ["PRESETS", "warehouse_grid"]
 
@@ -97,11 +97,8 @@ def warehouse_grid(
         "shelf_height": shelf_height, "aisle_x": aisle_x, "aisle_y": aisle_y,
         "highway_width": highway_width, "margin": margin, "station_spacing": station_spacing,
     }  # fmt: skip
-    for key, value in ints.items():
-        if int(value) < 1:
-            raise LayoutError(f"layout.{key} must be >= 1, got {value}")
-    if int(highway_every) < 0:
-        raise LayoutError(f"layout.highway_every must be >= 0, got {highway_every}")
+    check_sizes(**ints)
+    check_sizes(0, highway_every=highway_every)
     xs = _positions(width, shelf_width, aisle_x, margin, highway_every, highway_width)
     ys = _positions(height, shelf_height, aisle_y, margin, highway_every, highway_width)
     if not xs or not ys:

@@ -7,7 +7,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimGroups
+from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.training.logging import LOGGERS
+from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
 __all__ = ["CollectorConfig", "ImitationConfig", "PPOConfig", "TrainConfig", "TrainEvalConfig"]
 
@@ -55,6 +59,20 @@ class PPOConfig:
     normalize_advantage: bool = True
     reward_scale: float | None = None
 
+    def __post_init__(self) -> None:
+        check_fields(self, "algo.")
+        at_least(self, "algo.", 1, "frames_per_batch", "epochs", "minibatch_size")
+        for key in ("lr", "clip_epsilon", "max_grad_norm"):
+            check_number(f"algo.{key}", getattr(self, key), above=0)
+        for key in ("gamma", "lmbda"):
+            value = getattr(self, key)
+            if not 0 <= value <= 1:
+                raise ConfigError(f"algo.{key} must lie in [0, 1], got {value}")
+        for key in ("entropy_coeff_start", "entropy_coeff_end", "critic_coeff", "policy_coeff"):
+            check_number(f"algo.{key}", getattr(self, key), minimum=0)
+        if self.reward_scale is not None:
+            check_number("algo.reward_scale", self.reward_scale, above=0)
+
 
 @dataclass(kw_only=True)
 class CollectorConfig:
@@ -67,6 +85,10 @@ class CollectorConfig:
 
     workers: int = 1
     envs_per_worker: int = 64
+
+    def __post_init__(self) -> None:
+        check_fields(self, "collector.")
+        at_least(self, "collector.", 1, "workers", "envs_per_worker")
 
 
 @dataclass(kw_only=True)
@@ -81,6 +103,14 @@ class TrainEvalConfig:
 
     every_frames: int = 204_800
     seeds: list[int] = field(default_factory=lambda: list(range(1000, 1010)))
+
+    def __post_init__(self) -> None:
+        check_fields(self, "eval.")
+        at_least(self, "eval.", 1, "every_frames")
+        if not self.seeds:
+            raise ConfigError("eval.seeds must name at least one seed")
+        for i, seed in enumerate(self.seeds):
+            seed_value(seed, f"eval.seeds[{i}]")
 
 
 @dataclass(kw_only=True)
@@ -107,8 +137,7 @@ class ImitationConfig:
     lr: float = 1.0e-3
 
     def __post_init__(self) -> None:
-        from rtaw_marl.errors import ConfigError
-
+        check_fields(self, "imitation.")
         if self.teacher is not None and self.teacher not in TEACHERS:
             raise ConfigError(
                 f"imitation.teacher must be one of {', '.join(TEACHERS)} or null, "
@@ -161,3 +190,10 @@ class TrainConfig(SimGroups):
     output_dir: str | None = None
     progress: bool = True
     interop: bool = False
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        seed_value(self.seed, "seed")
+        at_least(self, "", 1, "frames", "torch_threads")
+        if self.logger not in LOGGERS:
+            raise ConfigError(f"logger must be one of {', '.join(LOGGERS)}, got {self.logger!r}")

@@ -106,11 +106,12 @@ def test_instant_travel_is_the_default() -> None:
 
 
 def test_instant_travel_noise_never_finishes_before_the_decision() -> None:
-    """Strongly negative noise is clipped at the decision time, as before."""
-    env = {"num_robots": 3, "num_tasks": 20, "noise_mean": -500.0, "noise_var": 1.0}
+    """A noise draw below minus the travel time is clipped at the decision time (the mean
+    must be >= 0, but single draws of a wide noise still fall that low)."""
+    env = {"num_robots": 3, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 10_000.0}
     sim = SimSpec.of(env, {"name": "open", "width": 8, "height": 8}, "direct", "random").build()
     sim.reset(0)
     while not sim.done:
         sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
-    np.testing.assert_array_equal(sim.task_finished, sim.task_assigned)
-    assert sim.metrics().makespan == float(sim.task_assigned.max())
+    assert (sim.task_finished >= sim.task_assigned).all()
+    assert (sim.task_finished == sim.task_assigned).any()

@@ -83,7 +83,7 @@ def test_open_grid_shape_and_cells() -> None:
 @pytest.mark.parametrize(("width", "height"), [(0, 5), (5, 0), (-1, 3)])
 def test_open_grid_rejects_empty_size(width: int, height: int) -> None:
     """A grid with no cell is a LayoutError naming the size."""
-    with pytest.raises(LayoutError, match="at least 1x1"):
+    with pytest.raises(LayoutError, match=r"layout\.(width|height) must be >= 1"):
         open_grid(width, height)
 
 

@@ -153,7 +153,8 @@ def test_designated_centre_outside_grid(key: str) -> None:
     ("kwargs", "match"),
     [
         ({"sigma": 0.0}, "sigma must be > 0"),
-        ({"sigma": float("nan")}, "sigma must be > 0"),
+        ({"sigma": float("nan")}, "sigma must be a finite number"),
+        ({"sigma": float("inf")}, "sigma must be a finite number"),
         ({"pickup_centres": []}, "pickup_centres"),
         ({"delivery_centres": [(1, 2, 3)]}, "delivery_centres"),
     ],

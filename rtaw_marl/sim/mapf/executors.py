@@ -74,6 +74,7 @@ class FleetExecutor(Executor):
 
     def reset(self, starts: np.ndarray, records: EpisodeRecords, rng: np.random.Generator) -> None:
         del rng  # no noise: times come from the planned paths
+        _check_distinct(starts, self.name)
         self._records = records
         self._done = False
         self.fleet.reset(starts, records.robot_free_at, len(records.tasks))
@@ -184,3 +185,21 @@ class CBSExecutor(FleetExecutor):
 
     def _make_fleet(self, grid: Grid, num_robots: int) -> Fleet:
         return CBSFleet(grid, num_robots, self.time_limit, self.max_nodes)
+
+
+def _check_distinct(starts: np.ndarray, name: str) -> None:
+    """Robots that occupy cells cannot share one at the start.
+
+    Raises:
+        ConfigError: Two robots start on the same cell (named as ``(x, y)``).
+    """
+    cells = np.asarray(starts, dtype=np.int64).reshape(-1, 2)
+    _, first, counts = np.unique(cells, axis=0, return_index=True, return_counts=True)
+    if (counts > 1).any():
+        a = int(first[np.flatnonzero(counts > 1)[0]])
+        b = next(j for j in range(a + 1, len(cells)) if (cells[j] == cells[a]).all())
+        x, y = (int(v) for v in cells[a])
+        raise ConfigError(
+            f"robots {a} and {b} both start at (x={x}, y={y}); navigator {name!r} keeps "
+            "robots on distinct cells: give env.robot_starts distinct cells"
+        )

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rtaw_marl.errors import ConfigError, unknown_name
+from rtaw_marl.utils.checks import check_fields
 
 __all__ = ["Option", "option_from"]
 
@@ -30,6 +31,7 @@ class Option:
                 f"{self.group}.name is {self.name!r} but the keys are those of {expected!r}; "
                 f"choose another option with {self.group}=NAME instead"
             )
+        check_fields(self, f"{self.group}.")
 
     group: ClassVar[str] = ""
 

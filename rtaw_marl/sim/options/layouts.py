@@ -7,10 +7,11 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from rtaw_marl.errors import ConfigError, unknown_name
+from rtaw_marl.errors import ConfigError, LayoutError, unknown_name
 from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
 from rtaw_marl.sim.options.base import Option
 from rtaw_marl.sim.warehouse_layouts import PRESETS, warehouse_grid
+from rtaw_marl.utils.checks import at_least
 
 __all__ = [
     "LAYOUTS",
@@ -42,6 +43,14 @@ class LayoutOption(Option, ABC):
             return load_layout(self.path)
         return self._generate()
 
+    def size(self) -> tuple[int, int] | None:
+        """``(width, height)`` of the layout before it is built, or ``None`` when only
+        building tells (a file); the builder refuses a size that cannot fit in memory."""
+        width, height = getattr(self, "width", None), getattr(self, "height", None)
+        if self.path is not None or width is None or height is None:
+            return None
+        return int(width), int(height)
+
     @abstractmethod
     def _generate(self) -> Layout:
         """The generated layout (used when ``path`` is not set)."""
@@ -59,6 +68,10 @@ class OpenLayoutConfig(LayoutOption):
     name: str = "open"
     width: int = 60
     height: int = 60
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        at_least(self, "layout.", 1, "width", "height", error=LayoutError)
 
     def _generate(self) -> Layout:
         return open_grid(self.width, self.height)
@@ -84,6 +97,11 @@ class ShelvesLayoutConfig(LayoutOption):
     shelf_height: int = 2
     aisle: int = 2
     margin: int = 3
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        sizes = ("width", "height", "shelf_width", "shelf_height", "aisle", "margin")
+        at_least(self, "layout.", 1, *sizes, error=LayoutError)
 
     def _generate(self) -> Layout:
         return shelf_grid(
@@ -120,6 +138,14 @@ class WarehouseLayoutConfig(LayoutOption):
     margin: int = 2
     station_spacing: int = 4
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        sizes = ("width", "height", "shelf_width", "shelf_height", "aisle_x", "aisle_y")
+        at_least(self, "layout.", 1, *sizes, error=LayoutError)
+        others = ("highway_width", "margin", "station_spacing")
+        at_least(self, "layout.", 1, *others, error=LayoutError)
+        at_least(self, "layout.", 0, "highway_every", error=LayoutError)
+
     def _generate(self) -> Layout:
         return self.generate()
 
@@ -144,6 +170,10 @@ class PresetLayoutConfig(LayoutOption):
     preset: str
     width: int = 60
     height: int = 60
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        at_least(self, "layout.", 1, "width", "height", error=LayoutError)
 
     def _generate(self) -> Layout:
         if self.preset not in PRESETS:

@@ -72,8 +72,9 @@ class SIPPConfig(NavigatorOption):
     time_limit: float = 10.0
 
     def __post_init__(self) -> None:
-        super().__post_init__()
+        # Before the generic type check: this message says what the key needs.
         _check_positive("navigator.time_limit", self.time_limit, "number", float)
+        super().__post_init__()
 
     def executor(self) -> Executor:
         return SIPPExecutor(time_limit=self.time_limit)
@@ -96,9 +97,10 @@ class CBSConfig(NavigatorOption):
     max_nodes: int = 200
 
     def __post_init__(self) -> None:
-        super().__post_init__()
+        # Before the generic type check: these messages say what the keys need.
         _check_positive("navigator.time_limit", self.time_limit, "number", float)
         _check_positive("navigator.max_nodes", self.max_nodes, "integer", int)
+        super().__post_init__()
 
     def executor(self) -> Executor:
         return CBSExecutor(time_limit=self.time_limit, max_nodes=self.max_nodes)

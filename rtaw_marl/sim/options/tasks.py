@@ -19,6 +19,7 @@ from rtaw_marl.sim.tasks import (
     TaskStream,
     load_task_csv,
 )
+from rtaw_marl.utils.checks import at_least, check_number
 
 __all__ = [
     "TASK_STREAMS",
@@ -71,6 +72,10 @@ class DesignatedTasksConfig(TaskOption):
     delivery_centres: list[list[float]] = field(default_factory=lambda: _centres())
     sigma: float = 5.0
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_number("tasks.sigma", self.sigma, above=0)
+
     def build(self) -> TaskStream:
         return DesignatedTasks(self.pickup_centres, self.delivery_centres, self.sigma)
 
@@ -87,6 +92,11 @@ class ClusteredTasksConfig(TaskOption):
     name: str = "clustered"
     num_clusters: int = 5
     sigma: float = 4.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        at_least(self, "tasks.", 1, "num_clusters")
+        check_number("tasks.sigma", self.sigma, above=0)
 
     def build(self) -> TaskStream:
         return ClusteredTasks(self.num_clusters, self.sigma)
