@@ -115,3 +115,35 @@ def test_not_a_torch_file(tmp_path: Path) -> None:
     path.write_bytes(b"\x00\x01garbage")
     with pytest.raises(ConfigError, match="cannot read checkpoint"):
         load_checkpoint(path)
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("malicious", "holds more than plain data (it would call posix.open"),
+        ("no model_config", "has no 'model_config' dict"),
+        ("wrong weights", "actor weights do not fit its model_config"),
+        ("garbage", "cannot read checkpoint"),
+    ],
+)
+def test_bad_checkpoints_through_the_cli(cli, tmp_path: Path, case: str, message: str) -> None:
+    """``rtaw-eval policy=checkpoint``: one line, exit 2, and a crafted file runs nothing."""
+    marker = tmp_path / "pwned"
+    path = tmp_path / "bad.pt"
+    if case == "malicious":
+        _save(path, RTAWConfig(), eval=_Payload(marker))
+    elif case == "no model_config":
+        ckpt = torch.load(_save(path, RTAWConfig()), weights_only=True)
+        del ckpt["model_config"]
+        torch.save(ckpt, path)
+    elif case == "wrong weights":
+        _save(path, RTAWConfig(embed_dim=32), model_config=plain_model(RTAWConfig()))
+    else:
+        path.write_bytes(b"PK\x03\x04 not a checkpoint")
+    result = cli("eval", "policy=[mpdm,checkpoint]", f"checkpoint={path}", "seeds=[0]",
+                 "env.num_tasks=20", "progress=false")  # fmt: skip
+    assert result.code == 2
+    assert message in result.err
+    assert len(result.err.strip().splitlines()) == 1
+    assert "Traceback" not in result.err
+    assert not marker.exists()
