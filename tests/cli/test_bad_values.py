@@ -102,6 +102,12 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("eval", ["tasks=designated", "tasks.sigma=inf"], "tasks.sigma must be a finite number"),
     (
         "eval",
+        ["tasks=designated", "tasks.pickup_centres=[[1,2,3]]"],
+        "tasks.pickup_centres must be a non-empty list of [x, y] pairs",
+    ),
+    ("eval", ["tasks=designated", "tasks.delivery_centres=[]"], "non-empty list of [x, y]"),
+    (
+        "eval",
         ["tasks=designated", "tasks.pickup_centres=[[nan,1.0]]"],
         "tasks.pickup_centres[0][0] must be a finite number, got nan",
     ),
@@ -324,6 +330,13 @@ def test_valid_robot_starts_still_work(starts: Any) -> None:
     sim = spec.build()
     sim.reset(0)
     assert sim.robot_start_xy.tolist() == [[1, 1], [2, 2]]
+
+
+def test_integer_centres_are_numbers(cli) -> None:
+    """OmegaConf refuses ints in a nested float list; the schema takes them."""
+    result = cli("eval", "tasks=designated", "tasks.pickup_centres=[[10,20]]", "policy=mpdm",
+                 "seeds=[0]", "env.num_tasks=20", "progress=false")  # fmt: skip
+    assert result.code == 0, result.err
 
 
 def test_real_booleans_are_still_booleans() -> None:

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.options.base import Option
 from rtaw_marl.sim.tasks import (
     DEFAULT_CENTRES,
@@ -19,7 +20,7 @@ from rtaw_marl.sim.tasks import (
     TaskStream,
     load_task_csv,
 )
-from rtaw_marl.utils.checks import at_least, check_number
+from rtaw_marl.utils.checks import at_least, check_number, check_value
 
 __all__ = [
     "TASK_STREAMS",
@@ -68,13 +69,22 @@ class DesignatedTasksConfig(TaskOption):
     """
 
     name: str = "designated"
-    pickup_centres: list[list[float]] = field(default_factory=lambda: _centres())
-    delivery_centres: list[list[float]] = field(default_factory=lambda: _centres())
+    # list[Any], checked below as [[x, y], ...] of numbers: OmegaConf 2.3 refuses an
+    # integer in a nested list[list[float]] (`tasks.pickup_centres=[[10,20]]`).
+    pickup_centres: list[Any] = field(default_factory=lambda: _centres())
+    delivery_centres: list[Any] = field(default_factory=lambda: _centres())
     sigma: float = 5.0
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_number("tasks.sigma", self.sigma, above=0)
+        for key in ("pickup_centres", "delivery_centres"):
+            centres = getattr(self, key)
+            check_value(f"tasks.{key}", centres, list[list[float]])
+            if not centres or any(len(c) != 2 for c in centres):
+                raise ConfigError(
+                    f"tasks.{key} must be a non-empty list of [x, y] pairs, got {centres}"
+                )
 
     def build(self) -> TaskStream:
         return DesignatedTasks(self.pickup_centres, self.delivery_centres, self.sigma)
