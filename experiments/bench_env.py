@@ -7,7 +7,7 @@ episode; the min-max spread is shown next to it. Benchmarks:
 * ``sim+MPDM``: the bare :class:`~rtaw_marl.sim.core.WarehouseSim` stepped by
   ``MPDM.act_sim`` -- decisions per second.
 * ``AEC first-valid``: ``env.last()`` + ``env.step(obs["action_mask"].argmax())``
-  through the public ``warehouse_v0.env`` (with PettingZoo's order-enforcing
+  through the public ``warehouse_v1.env`` (with PettingZoo's order-enforcing
   wrapper) -- steps per second over the live decisions of an episode (reset and the
   final dead steps are not timed).
 * ``AEC+MPDM(obs)``: the same loop with ``MPDM.act`` on the observation.
@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 import rtaw_marl
-from rtaw_marl import warehouse_v0
+from rtaw_marl import warehouse_v1
 from rtaw_marl.policies import MPDM, RBTS, BaselinePolicy
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import WarehouseSim
@@ -224,7 +224,7 @@ def bench_throughput(sizes: Sizes, settings: Sequence[Setting]) -> list[Row]:
             rows.append(Row("sim+MPDM", setting.label, m, sizes.num_tasks, samples, "decisions/s"))
             _progress(rows[-1])
 
-            env = warehouse_v0.env(**env_cfg, layout=setting.layout, navigator=setting.navigator)
+            env = warehouse_v1.env(**env_cfg, layout=setting.layout, navigator=setting.navigator)
             samples = repeat(
                 lambda s, env=env: aec_episode(env, first_valid, s), sizes.repeats, True
             )

@@ -1,10 +1,10 @@
 """rtaw_marl: learned lifelong multi-robot task allocation in warehouses (RTAW).
 
-``from rtaw_marl import warehouse_v0`` gives the PettingZoo environment. Importing the
+``from rtaw_marl import warehouse_v1`` gives the PettingZoo environment. Importing the
 package loads neither torch nor PettingZoo; the env registers itself with PettingZoo as
-``rtaw/warehouse-v0`` when :mod:`rtaw_marl.envs.pettingzoo` is imported (``from
-rtaw_marl import warehouse_v0`` does that), and at once if PettingZoo is already loaded,
-so ``import pettingzoo, rtaw_marl; pettingzoo.make("aec", "rtaw/warehouse-v0")`` works.
+``rtaw/warehouse-v1`` when :mod:`rtaw_marl.envs.pettingzoo` is imported (``from
+rtaw_marl import warehouse_v1`` does that), and at once if PettingZoo is already loaded,
+so ``import pettingzoo, rtaw_marl; pettingzoo.make("aec", "rtaw/warehouse-v1")`` works.
 PettingZoo has that registry from 1.27 on; with an earlier PettingZoo (>= 1.25, e.g. beside
 AgileRL) the env works the same and registration is skipped.
 """
@@ -15,11 +15,11 @@ import sys
 
 __all__ = ["ENV_ID", "__version__", "register_envs"]
 __version__ = "0.1.0"
-ENV_ID = "rtaw/warehouse-v0"
+ENV_ID = "rtaw/warehouse-v1"
 
 
 def register_envs() -> None:
-    """Register ``rtaw/warehouse-v0`` in PettingZoo's AEC registry (idempotent; a no-op
+    """Register ``rtaw/warehouse-v1`` in PettingZoo's AEC registry (idempotent; a no-op
     before PettingZoo 1.27, which has no registry)."""
     try:
         from pettingzoo.env_registry.registration import aec_registry, register

@@ -1,21 +1,23 @@
-"""# RTAW Warehouse (``rtaw_warehouse_v0``)
+"""# RTAW Warehouse (``rtaw_warehouse_v1``)
 
 Lifelong multi-robot task allocation in a warehouse grid (the RTAW paper's MDP) as a
 PettingZoo AEC environment. Whenever a robot becomes free it is the acting agent and
 picks one task from a queue of ``N`` visible tasks; its cost is the empty travel to the
 task's pickup (the *travel delay*).
 
-| Import             | `from rtaw_marl import warehouse_v0`                    |
-|--------------------|---------------------------------------------------------|
-| Actions            | Discrete                                                |
-| Parallel API       | No (one robot acts at a time)                           |
-| Manual control     | No                                                      |
-| Agents             | `agents = ['robot_0', ..., 'robot_{M-1}']`              |
-| Number of agents   | `num_robots` (M)                                        |
-| Action shape       | `()`                                                    |
-| Action values      | `Discrete(queue_len)`                                   |
-| Observation shape  | dict of arrays (see Observation below)                  |
-| Observation values | float32, roughly in `[0, 1]` (see scales)               |
+| Import             | `from rtaw_marl import warehouse_v1`                        |
+|--------------------|-------------------------------------------------------------|
+| Actions            | Discrete                                                    |
+| Parallel API       | No (one robot acts at a time)                               |
+| Manual control     | No                                                          |
+| Agents             | `agents = ['robot_0', ..., 'robot_{M-1}']`                  |
+| Number of agents   | `num_robots` (M)                                            |
+| Action shape       | `()`                                                        |
+| Action values      | `Discrete(queue_len)`                                       |
+| Observation shape  | `{"observation": features, "action_mask": (N,)}`            |
+| Observation values | float32 features (dict or flat vector), int8 mask          |
+| State shape        | `(3M + 7N,)`                                                |
+| State values       | float32, `>= 0`                                             |
 
 ## Agents and turn order
 
@@ -27,41 +29,67 @@ the same robot may act several times in a row.
 
 ## Observation
 
-A dict per agent, all float32 except the mask. Lengths and times are divided by the
-layout scale `L = max(W, H)` (robots move one cell per second, so times and distances
-share the scale); coordinates use `x` = column, `y` = row.
+`observe(agent)` returns PettingZoo's masked layout `{"observation": features,
+"action_mask": mask}`. Two constructor options choose the features:
 
-* `robots` `[M, 3]`: for every robot, `(x / L, y / L, time_until_free / L)`. The cell
-  is where the robot will be when next free (its current task's destination). The same
-  array object is shared by all agents' observations of one decision; copy it before
-  modifying it.
-* `tasks` `[N, 6]`: for every queue slot, `(ox, oy, dx, dy, k, l) / L`: origin,
-  destination, `k` the travel distance from *this* robot to the origin and `l` the
-  task length (origin -> destination). Empty slots (possible at the end of a `drain`
-  episode) are all zeros.
+* `observation="full"` (default): `robots`, `tasks`, `agent`, `relations`, `rivals`;
+  `observation="compact"`: the same without `robots`, so its size does not depend on
+  `M` (`rivals` summarises the other robots; the robot table is in `state()`).
+* `obs_format="dict"` (default): a dict of arrays; `obs_format="flat"`: one float32
+  vector for Box-only wrappers (SuperSuit's `flatten_v0`, `normalize_obs_v0`, ...): the
+  arrays flattened in C order and concatenated in the order listed, `3M + 46N + 3`
+  values (full) or `46N + 3` (compact). `env.unwrapped.obs_layout` has `flat_slices`
+  and `unflatten(vector)`.
+
+Features are float32. Lengths and times are divided by the layout scale `L = max(W, H)`
+(robots move one cell per second); coordinates use `x` = column, `y` = row.
+
+* `robots` `[M, 3]` (full only): for every robot, `(x / L, y / L, time_until_free / L)`,
+  in `[0, 1] x [0, 1] x [0, inf)`. The cell is where the robot will be when next free
+  (its current task's destination).
+* `tasks` `[N, 6]`: for every queue slot, `(ox, oy, dx, dy, k, l) / L`, all `>= 0`:
+  origin, destination, `k` the travel distance from *this* robot to the origin and `l`
+  the task length (origin -> destination). Empty slots (possible at the end of a
+  `drain` episode) are all zeros.
 * `agent` `[3]`: this robot's own row of `robots`.
-* `relations` `[N, 8]`: relational features of each slot from *this* robot's point of
-  view (read by `model=rtaw_plus`), all divided by `L`: its distance `k` to the origin,
-  the task length, the time the task has waited in the queue, the arrival of the three
-  fastest rivals minus `k`, a soft-min (temperature `0.05 L`) of the rivals' arrivals
-  minus `k`, and the distance from the task's destination to the nearest other queued
-  origin. A robot's *arrival* is its time until free plus the distance from the cell
-  where it will be free; *rivals* are the other robots. A missing rival or chain
-  partner counts as `2` (two layout scales away).
+* `relations` `[N, 8]`: each slot from *this* robot's point of view, divided by `L`:
+  its distance `k` to the origin, the task length, the time the task has waited, the
+  arrival of the three fastest rivals minus `k`, a soft-min (temperature `0.05 L`) of
+  the rivals' arrivals minus `k` (these four are negative when a rival arrives first),
+  and the distance from the destination to the nearest other queued origin. A robot's
+  *arrival* is its time until free plus its distance; *rivals* are the other robots. A
+  missing rival or chain partner counts as `2` (two layout scales away).
 * `rivals` `[N, 8, 4]`: per slot, the 8 rivals arriving first (sorted; ties: lowest
   robot id), each `(arrival - k, time_until_free, distance) / L` and a validity flag
   (0 for the padding rows when there are fewer than 9 robots).
-* `action_mask` `[N]` int8: 1 for the slots holding a task. The mask of any agent other
-  than the selected one is all zeros.
+
+The feature spaces are `Box(-inf, inf)` (the real ranges are above): TorchRL's
+`PettingZooWrapper` copies the bounds of all `M` agents once per agent per step, so
+finite bounds cost `O(M^2)` per step. `observation_spaces` and `action_spaces` map every
+agent to one shared space object. Arrays are shared until the next decision (`robots`
+between agents): copy one before modifying it. The acting robot's features are
+bit-identical to the batched TorchRL env's.
+
+## Action mask
+
+`action_mask` `[N]` int8: 1 for the slots holding a task. The mask of any agent other
+than the selected one is all zeros (TorchRL's `PettingZooWrapper` gives those rows an
+all-True mask and marks the acting row in `("agents", "mask")`).
+
+## State
+
+`state()` is the global state, `float32 [3M + 7N]` in `state_space = Box(0, inf)`: the
+robot table `[M, 3]` (the `robots` feature), then the queue `[N, 7]`: `(ox, oy, dx, dy,
+length, wait) / L` and `queued` (1 or 0) per slot (empty slots are zeros), flattened in
+C order. The acting robot is the first one whose time until free is 0.
 
 ## Actions
 
-The index of a queue slot: a Python or NumPy integer (or a 0-d integer array). The
-chosen slot is refilled from the task stream. Anything else raises
-`rtaw_marl.errors.InvalidActionError` and leaves the env as it was (nothing is silently
-fixed): an out-of-range or empty slot, a float (even `1.0`), a bool, a string, an array
-of shape other than `()`, or `None` for a live agent. `None` is the only valid action of
-a terminated or truncated agent.
+A queue slot: a Python or NumPy integer (or a 0-d integer array); the slot is refilled
+from the task stream. Anything else raises `rtaw_marl.errors.InvalidActionError` and
+leaves the env as it was: an out-of-range or empty slot, a float (even `1.0`), a bool,
+a string, an array of shape other than `()`, or `None` for a live agent. `None` is the
+only valid action of a terminated or truncated agent.
 
 ## Rewards
 
@@ -72,66 +100,83 @@ the paper's ablation minus the task length (`"length"`) or their sum
 ## Termination and truncation
 
 An episode is `num_tasks` decisions. In `episode_mode="drain"` (default) exactly
-`num_tasks` tasks are served and the episode *terminates*; in `"paper"` mode the queue
-is always refilled, unserved tasks remain at the end, and the episode is *truncated*.
-Then every agent is terminated (or truncated) at once, and `infos[agent]["episode"]`
-holds the episode metrics (`ttd`, `makespan`, ...). Once every agent has stepped with
-`None` and been removed, `last()` still answers for `agent_selection` (the last agent
-removed): its final observation, reward `0`, the episode's termination and truncation
-flags, and the episode info.
+`num_tasks` tasks are served and every agent *terminates* at once; in `"paper"` mode the
+queue is always refilled and every agent is *truncated*. Once every agent has stepped
+with `None` and been removed, `last()` still answers for `agent_selection` (the last
+agent removed): final observation, reward `0`, the episode's flags and infos.
+
+## Infos
+
+`infos[agent]` holds the episode metrics as flat keys, every field of
+`rtaw_marl.sim.metrics.EpisodeMetrics`: `ttd`, `makespan`, `task_length`, `idle_mean`,
+`idle_max`, `wait_mean`, `wait_max` (seconds), `tasks_served`, `decisions` (integers).
+They are there from `reset()` on, as zeros, so that vectorising wrappers and TorchRL
+(whose info spec comes from the reset infos) carry them, and hold the episode's metrics
+(`sim.metrics().as_dict()`) once it ends. One dict is shared by every agent (read-only).
 
 ## Seeding
 
-`reset(seed=s)` takes `None` or an integer `>= 0` (Python or NumPy); anything else (a
-negative or float seed, a bool, a string) raises `rtaw_marl.errors.ConfigError`.
+`reset(seed=s)` takes `None` or an integer `>= 0` (else `ConfigError`). A seed fixes the
+episode (tasks, starts, noise) and reseeds `np_random` (a NumPy `Generator`;
+`np_random_seed` is `s`); `reset()` without a seed draws the episode seed from
+`np_random`, so a seeded sequence of episodes is reproducible.
+
+## Rendering
+
+`render_mode="human"` prints the grid as text, `"ansi"` returns it: `.` free, `@`
+obstacle, `o` / `d` origin / destination of a queued task, `R` a robot (where it will
+next be free), `*` the robot choosing now, then a status line.
 
 ## Arguments
 
-`env(layout=None, navigator=None, tasks=None, render_mode=None, **env)`: the simulator
-keys `**env` are those of `SimConfig` (`num_robots=10, num_tasks=500, queue_len=10,
-episode_mode="drain", noise_mean=0.25, noise_var=0.25, reward="ttd", robot_starts=None,
-robot_free_times=None`; an unknown key is an error listing them). `layout` and `tasks`
-take an option name, a `{"name": ..., **keys}` mapping, a typed option
-(`rtaw_marl.sim.options`) or an object (`Layout`, `TaskStream`); `layout` also takes a
-file path; `None` means the default (`"shelves"`, `"designated"`). `navigator` is
-`"direct"`, `"astar"` (default), or a collision-aware `"sipp"` / `"cbs"` (or `{"name":
-"cbs", "time_limit": 5}`): robots then occupy cells and wait for each other, the reward
-is the TTD planned at the decision and the episode metrics count the executed waits;
-these need `noise_mean=0, noise_var=0`. `render_mode="ansi"` returns the grid as text.
+`env(layout=None, navigator=None, tasks=None, render_mode=None, observation="full",
+obs_format="dict", **env)`: `**env` are the keys of `SimConfig` (`num_robots=10,
+num_tasks=500, queue_len=10, episode_mode="drain", noise_mean=0.25, noise_var=0.25,
+reward="ttd", robot_starts=None, robot_free_times=None`); an unknown key or option is a
+`ConfigError` listing them. `layout` and `tasks` take a name, a `{"name": ..., **keys}`
+mapping, a typed option (`rtaw_marl.sim.options`) or an object (`Layout`, `TaskStream`),
+`layout` also a file path (default `"shelves"`, `"designated"`). `navigator` is
+`"direct"`, `"astar"` (default), or a collision-aware `"sipp"` / `"cbs"` (robots wait
+for each other; the reward is the TTD planned at the decision, the metrics count the
+executed waits; needs `noise_mean=0, noise_var=0`).
 
 ## Version History
 
-* v0: initial release.
+* v1 (`rtaw/warehouse-v1`): masked-observation layout `{"observation", "action_mask"}`
+  (same feature values), `observation="compact"`, `obs_format="flat"`, `state()`, flat
+  metrics in `infos` from `reset()` on (v0: `infos[agent]["episode"]` at the end),
+  `render_mode="human"`, `np_random`, `observation_spaces` / `action_spaces`.
+* v0: initial release (features beside `action_mask` at the top level). Removed:
+  `rtaw_marl.warehouse_v0.env()` raises PettingZoo's `DeprecatedEnv`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 from gymnasium import spaces
+from gymnasium.utils import seeding
 from pettingzoo import AECEnv
 from pettingzoo.utils import wrappers
 
 from rtaw_marl import register_envs
-from rtaw_marl.envs.features import (
-    NUM_RIVALS,
-    RELATION_FEATURES,
-    RIVAL_FEATURES,
-    relational_features,
-    robot_features,
-    task_features,
-)
+from rtaw_marl.envs.observations import AgentViews, ObservationLayout, state_vector
 from rtaw_marl.envs.text import render_ansi
-from rtaw_marl.errors import InvalidActionError
+from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.sim.metrics import EpisodeMetrics
 from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
-__all__ = ["env", "raw_env"]
+__all__ = ["env", "raw_env", "zero_info"]
+
+Observation = dict[str, Any]
+Info = dict[str, float | int]
 
 
 def env(**kwargs: Any) -> AECEnv:
@@ -150,9 +195,7 @@ class _OrderEnforcing(wrappers.OrderEnforcingWrapper):
     so it raises ``KeyError`` once every agent is removed; :meth:`raw_env.last` answers.
     """
 
-    def last(
-        self, observe: bool = True
-    ) -> tuple[dict[str, np.ndarray] | None, float, bool, bool, dict[str, Any]]:
+    def last(self, observe: bool = True) -> tuple[Observation | None, float, bool, bool, Info]:
         """:meth:`raw_env.last`, after the wrapper's check that ``reset`` was called."""
         if not self._has_reset:
             raise AttributeError("last() cannot be called before reset()")
@@ -162,12 +205,19 @@ class _OrderEnforcing(wrappers.OrderEnforcingWrapper):
         return str(self.env)
 
 
+def zero_info() -> Info:
+    """The infos before an episode ends: every :class:`EpisodeMetrics` field at zero."""
+    return {
+        f.name: 0 if f.type in ("int", int) else 0.0 for f in dataclasses.fields(EpisodeMetrics)
+    }
+
+
 class raw_env(AECEnv):
     """The unwrapped warehouse AEC environment; see the module docstring."""
 
     metadata: ClassVar[dict[str, Any]] = {
-        "name": "rtaw_warehouse_v0",
-        "render_modes": ["ansi"],
+        "name": "rtaw_warehouse_v1",
+        "render_modes": ["human", "ansi"],
         "is_parallelizable": False,
     }
 
@@ -177,51 +227,47 @@ class raw_env(AECEnv):
         navigator: str | Mapping[str, Any] | NavigatorOption | None = None,
         tasks: str | Mapping[str, Any] | TaskOption | None = None,
         render_mode: str | None = None,
+        *,
+        observation: str = "full",
+        obs_format: str = "dict",
         **env: Any,
     ) -> None:
-        """Build the env.
+        """Build the env (see the module docstring, *Arguments*).
 
         Args:
-            layout: A layout option: a name (``"shelves"``, ``"A"`` is ``{"name":
-                "preset", "preset": "A"}``), a file path, a ``{"name": ..., **keys}``
-                mapping or a typed option; ``None``: the default (60x60 shelves).
-            navigator: ``"direct"``, ``"astar"`` (default), ``"sipp"``, ``"cbs"``, or a
-                mapping/typed option with their keys.
+            layout: A layout name, file path, ``{"name": ..., **keys}`` mapping or typed
+                option; ``None``: the default (60x60 shelves).
+            navigator: ``"direct"``, ``"astar"`` (default), ``"sipp"``, ``"cbs"`` or a
+                mapping/typed option.
             tasks: A task-stream option (default ``"designated"``).
-            render_mode: ``None`` or ``"ansi"``.
-            **env: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`:
-                ``num_robots``, ``num_tasks``, ``queue_len``, ``episode_mode``,
-                ``noise_mean``, ``noise_var``, ``reward``, ``robot_starts``,
-                ``robot_free_times``); an unknown key is a ``ConfigError`` listing them.
+            render_mode: ``None``, ``"human"`` or ``"ansi"``.
+            observation: ``"full"`` or ``"compact"`` (no robot table).
+            obs_format: ``"dict"`` or ``"flat"`` (one vector).
+            **env: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`).
+
+        Raises:
+            ConfigError: An unknown or invalid option or key.
         """
         super().__init__()
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'ansi', got {render_mode!r}")
+        modes = self.metadata["render_modes"]
+        if render_mode is not None and render_mode not in modes:
+            raise ConfigError(
+                f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
+            )
         spec = SimSpec.of(env, layout, navigator, tasks)
-        config = spec.env
+        m, n = spec.env.num_robots, spec.env.queue_len
+        self.obs_layout = ObservationLayout(observation, obs_format, m, n)
         self.sim: WarehouseSim = build_sim(spec)
         self.render_mode = render_mode
         self.scale = self.sim.layout.scale
-        m, n = config.num_robots, config.queue_len
         self.possible_agents = [f"robot_{i}" for i in range(m)]
         self._index = {name: i for i, name in enumerate(self.possible_agents)}
-        inf = np.float32(np.inf)
-        self._observation_space = spaces.Dict(
-            {
-                "robots": spaces.Box(0.0, np.array([[1, 1, inf]] * m, np.float32), (m, 3)),
-                "tasks": spaces.Box(
-                    0.0, np.array([[1, 1, 1, 1, inf, inf]] * n, np.float32), (n, 6)
-                ),
-                "agent": spaces.Box(0.0, np.array([1, 1, inf], np.float32), (3,)),
-                # Rival offsets are negative when a rival arrives first.
-                "relations": spaces.Box(-inf, inf, (n, len(RELATION_FEATURES)), np.float32),
-                "rivals": spaces.Box(-inf, inf, (n, NUM_RIVALS, len(RIVAL_FEATURES)), np.float32),
-                "action_mask": spaces.Box(0, 1, (n,), np.int8),
-            }
-        )
-        self._action_space = spaces.Discrete(n)
-        self._seed_rng = np.random.default_rng()
-        self._zero_mask = np.zeros(n, dtype=np.int8)
+        # One space object per kind: every agent's spaces are identical.
+        self.observation_spaces = dict.fromkeys(self.possible_agents, self.obs_layout.space())
+        self.action_spaces = dict.fromkeys(self.possible_agents, spaces.Discrete(n))
+        self.state_space = self.obs_layout.state_space()
+        self.np_random, self.np_random_seed = seeding.np_random()
+        self._views = AgentViews(self.sim, self.obs_layout)
 
     @property
     def navigator(self) -> Navigator:
@@ -229,74 +275,45 @@ class raw_env(AECEnv):
         return self.sim.navigator
 
     def observation_space(self, agent: str) -> spaces.Dict:
-        return self._observation_space
+        return self.observation_spaces[agent]
 
     def action_space(self, agent: str) -> spaces.Discrete:
-        return self._action_space
+        return self.action_spaces[agent]
 
     # ------------------------------------------------------------------ reset
     def reset(self, seed: int | None = None, options: dict | None = None) -> None:
-        """Start an episode; ``seed`` fixes tasks, starts and noise.
-
-        Without a seed, the episode seed is drawn from a generator seeded by the last
-        explicit seed, so a seeded sequence of episodes is reproducible.
+        """Start an episode; ``seed`` fixes tasks, starts and noise and reseeds
+        ``np_random``; without a seed the episode seed is drawn from ``np_random``.
 
         Raises:
             ConfigError: ``seed`` is neither ``None`` nor an integer ``>= 0``.
         """
         if seed is not None:
             seed = seed_value(seed)
-            self._seed_rng = np.random.default_rng(seed)
+            self.np_random, self.np_random_seed = seeding.np_random(seed)
             episode_seed = seed
         else:
-            episode_seed = int(self._seed_rng.integers(2**63))
+            episode_seed = int(self.np_random.integers(2**63))
         self.sim.reset(episode_seed)
+        self._views.clear()
         self.agents = self.possible_agents[:]
         self.rewards = dict.fromkeys(self.agents, 0.0)
         self._cumulative_rewards = dict.fromkeys(self.agents, 0.0)
         self.terminations = dict.fromkeys(self.agents, False)
         self.truncations = dict.fromkeys(self.agents, False)
-        self.infos = {agent: {} for agent in self.agents}
+        self._final_info = zero_info()
+        self.infos = dict.fromkeys(self.agents, self._final_info)
         self._last_actor = self.possible_agents[0]
-        self._cache_decision = -1
         self.agent_selection = self.possible_agents[self.sim.robot]
 
     # ------------------------------------------------------------------ observe
-    def observe(self, agent: str) -> dict[str, np.ndarray]:
-        robot = self._index[agent]
-        sim = self.sim
-        self._refresh_cache()
-        if robot == sim.robot and not sim.done:
-            distance, mask = sim.robot_distances(), self._mask
-        else:
-            distance, mask = sim.robot_distances(robot), self._zero_mask.copy()
-        relations, rivals = relational_features(
-            self._all_dist, self._remaining, robot, sim.queue_length, self._waits,
-            self._chain, sim.queue_mask, self.scale,
-        )  # fmt: skip
-        return {
-            "robots": self._robot_rows,
-            "tasks": task_features(
-                sim.queue_rows, sim.queue_length, distance, sim.queue_mask, self.scale
-            ),
-            "agent": self._robot_rows[robot].copy(),
-            "relations": relations,
-            "rivals": rivals,
-            "action_mask": mask,
-        }
+    def observe(self, agent: str) -> Observation:
+        """``{"observation": features, "action_mask": int8 [N]}`` (module docstring)."""
+        return self._views.observe(self._index[agent])
 
-    def _refresh_cache(self) -> None:
-        """Per-decision robot features shared by all agents' observations."""
-        sim = self.sim
-        if self._cache_decision == sim.decisions:
-            return
-        self._robot_rows = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, self.scale)
-        self._mask = sim.queue_mask.astype(np.int8)
-        self._all_dist = sim.distance_matrix()
-        self._remaining = sim.robot_remaining()
-        self._waits = sim.queue_waits()
-        self._chain = sim.chain_distances()
-        self._cache_decision = sim.decisions
+    def state(self) -> np.ndarray:
+        """The global state ``float32 [3M + 7N]``: robot table, then queue rows."""
+        return state_vector(self.sim)
 
     # ------------------------------------------------------------------ step
     def step(self, action: int | None) -> None:
@@ -340,7 +357,7 @@ class raw_env(AECEnv):
             self.truncations = done
         else:
             self.terminations = done
-        self._final_info = {"episode": sim.metrics().as_dict()}
+        self._final_info = sim.metrics().as_dict()
         self.infos = dict.fromkeys(self.agents, self._final_info)
 
     def _dead_step(self, action: int | None) -> None:
@@ -350,28 +367,17 @@ class raw_env(AECEnv):
             raise InvalidActionError(
                 f"{agent} is done; its only valid action is None, got {action!r}"
             )
-        for table in (
-            self.terminations,
-            self.truncations,
-            self.rewards,
-            self._cumulative_rewards,
-            self.infos,
-        ):
+        tables = (self.terminations, self.truncations, self.rewards, self._cumulative_rewards)
+        for table in (*tables, self.infos):
             del table[agent]
         self.agents.remove(agent)
         if self.agents:
             self.agent_selection = self.agents[0]
 
-    def last(
-        self, observe: bool = True
-    ) -> tuple[dict[str, np.ndarray] | None, float, bool, bool, dict[str, Any]]:
-        """Observation, cumulative reward, terminated, truncated and info of
-        ``agent_selection``, as ``AECEnv.last``.
-
-        Once every agent has been removed (the per-agent tables are empty), the answer
-        for ``agent_selection``, the last agent removed, is its final observation, reward
-        0 (its reward was handed out before its removal), the episode's flags and info.
-        """
+    def last(self, observe: bool = True) -> tuple[Observation | None, float, bool, bool, Info]:
+        """``AECEnv.last``; once every agent is removed (the per-agent tables are empty),
+        the final observation of ``agent_selection`` (the last agent removed), reward 0
+        (handed out before its removal), the episode's flags and infos."""
         agent = self.agent_selection
         if agent in self.terminations:
             return super().last(observe)
@@ -381,12 +387,14 @@ class raw_env(AECEnv):
 
     # ------------------------------------------------------------------ render
     def render(self) -> str | None:
+        """The grid as text (``"ansi"``), printed (``"human"``), or ``None`` (no mode)."""
         if self.render_mode is None:
             return None
-        return render_ansi(self.sim)
-
-    def close(self) -> None:
-        pass
+        text = render_ansi(self.sim)
+        if self.render_mode == "human":
+            print(text)
+            return None
+        return text
 
 
 register_envs()

@@ -1,8 +1,10 @@
 """Classical allocation rules: MPDM, RBTS and uniform random.
 
 Each rule acts either on the simulator directly (:meth:`BaselinePolicy.act_sim`, the
-fast path used by evaluation) or on a PettingZoo observation (:meth:`act`), and both
-paths choose the same task for the same state. Ties (within a relative 1e-6) are broken
+fast path used by evaluation) or on a PettingZoo observation (:meth:`act`: the
+``{"observation": features, "action_mask": mask}`` of ``rtaw_warehouse_v1`` with dict
+features; RBTS needs ``observation="full"``), and both paths choose the same task for
+the same state. Ties (within a relative 1e-6) are broken
 uniformly at random with the policy's own generator, seeded by :meth:`reset`: in the
 paper's two-task setting MPDM faces two equally close pickups and picks at random.
 
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -29,9 +32,27 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.navigation import Navigator
 
-__all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy"]
+__all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy", "observation_features"]
 
 _TIE_RTOL = 1e-6
+
+
+def observation_features(observation: Mapping[str, Any], *keys: str) -> Mapping[str, np.ndarray]:
+    """The feature dict of a ``rtaw_warehouse_v1`` observation, holding ``keys``.
+
+    Raises:
+        ConfigError: The features are a flat vector, or lack one of ``keys`` (the
+            compact observation has no ``robots``).
+    """
+    features = observation["observation"]
+    if not isinstance(features, Mapping):
+        raise ConfigError("rules read dict features: build the env with obs_format='dict'")
+    missing = [key for key in keys if key not in features]
+    if missing:
+        raise ConfigError(
+            f"this rule reads {missing} from the observation: build the env with observation='full'"
+        )
+    return features
 
 
 class BaselinePolicy(ABC):
@@ -61,7 +82,7 @@ class BaselinePolicy(ABC):
 
     @abstractmethod
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        """The slot to assign, from a ``rtaw_warehouse_v0`` observation of the free robot."""
+        """The slot to assign, from a ``rtaw_warehouse_v1`` observation of the free robot."""
 
     def _nearest(self, d: np.ndarray, mask: np.ndarray) -> int:
         """Index of the smallest ``d`` among ``mask``; ties broken at random."""
@@ -91,7 +112,8 @@ class MPDM(BaselinePolicy):
         return self._nearest(d, sim.queue_mask)
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        d = np.asarray(observation["tasks"][:, 4], dtype=np.float64) * self.scale
+        tasks = observation_features(observation, "tasks")["tasks"]
+        d = np.asarray(tasks[:, 4], dtype=np.float64) * self.scale
         return self._nearest(d, np.asarray(observation["action_mask"], dtype=bool))
 
 
@@ -110,13 +132,14 @@ class RBTS(BaselinePolicy):
         if self.navigator is None:
             raise ConfigError("RBTS on observations needs the env's navigator")
         mask = np.asarray(observation["action_mask"], dtype=bool)
-        robots = observation["robots"]
+        features = observation_features(observation, "robots", "tasks", "agent")
+        robots = features["robots"]
         cells = np.rint(robots[:, :2].astype(np.float64) * self.scale).astype(np.int64)
-        origins = np.rint(observation["tasks"][:, :2].astype(np.float64) * self.scale)
+        origins = np.rint(features["tasks"][:, :2].astype(np.float64) * self.scale)
         origins = origins.astype(np.int64)
         # The free robot is the row equal to the agent's own features; robots sharing
         # a cell and a free time have equal rows, and excluding any one of them is the same.
-        me = int(np.all(robots == observation["agent"], axis=1).argmax())
+        me = int(np.all(robots == features["agent"], axis=1).argmax())
         if len(robots) == 1:
             d = self.navigator.distance_matrix(cells, origins[mask])
             scores = np.full(len(mask), -np.inf)

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.policies.baselines import BaselinePolicy
+from rtaw_marl.policies.baselines import BaselinePolicy, observation_features
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.navigation import Navigator
 
@@ -131,14 +131,16 @@ class Lookahead(BaselinePolicy):
         if self.navigator is None:
             raise ConfigError("lookahead on observations needs the env's navigator")
         mask = np.asarray(observation["action_mask"], dtype=bool)
-        tasks = observation["tasks"].astype(np.float64) * self.scale
+        keys = ("tasks",) if self.horizon == 0 else ("robots", "tasks", "agent")
+        features = observation_features(observation, *keys)
+        tasks = features["tasks"].astype(np.float64) * self.scale
         first = tasks[:, 4]
         if self.horizon == 0:
             return self._nearest(first, mask)
-        robots = observation["robots"].astype(np.float64)
+        robots = features["robots"].astype(np.float64)
         cells = np.rint(robots[:, :2] * self.scale).astype(np.int64)
         rows = np.rint(tasks[:, :4]).astype(np.int64)
-        me = _acting_row(robots, observation["agent"])
+        me = _acting_row(robots, features["agent"])
         ends = _end_distances(self.navigator, cells, rows, mask)
         # Observations are float32: distances and lengths are measured again, and free
         # times recovered to a millisecond, so that a robot freed at the same second as
@@ -165,12 +167,13 @@ class Hungarian(BaselinePolicy):
         if self.navigator is None:
             raise ConfigError("hungarian on observations needs the env's navigator")
         mask = np.asarray(observation["action_mask"], dtype=bool)
-        robots = observation["robots"].astype(np.float64)
+        features = observation_features(observation, "robots", "tasks", "agent")
+        robots = features["robots"].astype(np.float64)
         cells = np.rint(robots[:, :2] * self.scale).astype(np.int64)
-        origins = np.rint(observation["tasks"][:, :2].astype(np.float64) * self.scale)
+        origins = np.rint(features["tasks"][:, :2].astype(np.float64) * self.scale)
         dist = np.zeros((len(robots), len(mask)))
         dist[:, mask] = self.navigator.distance_matrix(cells, origins[mask].astype(np.int64))
-        me = _acting_row(robots, observation["agent"])
+        me = _acting_row(robots, features["agent"])
         return self._choose(dist, np.round(robots[:, 2] * self.scale, 3), me, mask)
 
     def _choose(self, dist: np.ndarray, wait: np.ndarray, robot: int, mask: np.ndarray) -> int:

@@ -1,11 +1,20 @@
 """The interop route: training through TorchRL's ``PettingZooWrapper`` on the AEC env.
 
 This is how other MARL libraries plug the env in. All robots form one group
-(``MarlGroupMapType.ALL_IN_ONE_GROUP``), observations arrive under
-``("agents", "observation", ...)``, ``("agents", "mask")`` marks the acting robot of each
-step, and the loss counts only that row (``loss_mask_key``). The wrapper calls
-``observe()`` for every robot every step, so it is meant for small ``M``; the batched
-native env is the fast route.
+(``MarlGroupMapType.ALL_IN_ONE_GROUP``). The env's observation ``{"observation":
+features, "action_mask": mask}`` arrives as ``("agents", "observation", "observation",
+name)`` per feature (the wrapper nests the env's ``"observation"`` entry under its own)
+and ``("agents", "action_mask")``; ``("agents", "mask")`` marks the acting robot of each
+step, the loss counts only that row (``loss_mask_key``), and the episode metrics arrive
+as ``("agents", "info", name)``.
+
+The env is built with ``observation="full"`` and ``obs_format="dict"``: ``model=rtaw``
+reads the robot table ``robots`` in its actor and critic, and ``model=rtaw_plus`` in its
+critic, and the full observation carries it per agent. (The compact observation has no
+robot table; the wrapper's ``return_state`` would put ``state()`` at the root, outside
+the ``"agents"`` group the networks read.) The wrapper calls ``observe()`` for every
+robot every step, so the full observation costs ``O(M^2)`` per step: this route is for
+small ``M``; the batched native env is the fast route.
 """
 
 from __future__ import annotations
@@ -78,7 +87,7 @@ BATCHED_KEYS = TrainKeys(
 )
 
 INTEROP_KEYS = TrainKeys(
-    observation_root=("agents", "observation"),
+    observation_root=("agents", "observation", "observation"),
     action_mask=("agents", "action_mask"),
     action=("agents", "action"),
     log_prob=("agents", "action_log_prob"),
@@ -100,7 +109,10 @@ def make_interop_env(spec: SimSpec, seed: int) -> PettingZooWrapper:
         seed: Seed of the first reset.
     """
     env_keys = {f.name: getattr(spec.env, f.name) for f in dataclasses.fields(spec.env)}
-    aec = warehouse_env(layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks, **env_keys)
+    aec = warehouse_env(
+        layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks,
+        observation="full", obs_format="dict", **env_keys,
+    )  # fmt: skip
     with warnings.catch_warnings():
         # The wrapper warns on any PettingZoo but the one torchrl is tested with; the
         # PettingZoo this package pins (pyproject.toml) is covered by its interop tests.

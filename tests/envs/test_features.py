@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from rtaw_marl import warehouse_v0
+from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.features import MISSING, NUM_RIVALS, SOFTMIN_TEMPERATURE
 from tests.envs.test_pettingzoo import first_valid, is_done, oracle_distance
 
@@ -53,7 +53,7 @@ def _oracle(sim, robot: int, navigator: str) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize(("navigator", "robots"), [("astar", 5), ("direct", 12), ("astar", 1)])
 def test_relational_features_match_oracle(navigator: str, robots: int) -> None:
     """Every agent's view at every decision of a drain episode (empty slots at the end)."""
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=robots,
         queue_len=4,
         num_tasks=20,
@@ -66,10 +66,10 @@ def test_relational_features_match_oracle(navigator: str, robots: int) -> None:
     checked = 0
     while not is_done(env):
         for i, agent in enumerate(env.agents):
-            obs = env.observe(agent)
+            features = env.observe(agent)["observation"]
             relations, rivals = _oracle(sim, i, navigator)
-            np.testing.assert_allclose(obs["relations"], relations, rtol=1e-5, atol=1e-5)
-            np.testing.assert_allclose(obs["rivals"], rivals, rtol=1e-5, atol=1e-5)
+            np.testing.assert_allclose(features["relations"], relations, rtol=1e-5, atol=1e-5)
+            np.testing.assert_allclose(features["rivals"], rivals, rtol=1e-5, atol=1e-5)
             checked += 1
         obs, *_ = env.last()
         env.step(first_valid(obs))

@@ -1,4 +1,4 @@
-"""Tests of the PettingZoo warehouse env ``rtaw_warehouse_v0`` against its docstring spec.
+"""Tests of the PettingZoo warehouse env ``rtaw_warehouse_v1`` against its docstring spec.
 
 Expected values come from independent oracles where possible: on an obstacle-free grid
 the ``astar`` distance is the Manhattan distance and the ``direct`` distance the
@@ -20,7 +20,7 @@ import pytest
 from pettingzoo.test import api_test, seed_test
 
 import rtaw_marl
-from rtaw_marl import warehouse_v0
+from rtaw_marl import warehouse_v1
 from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS
 from rtaw_marl.sim.mapf.conflicts import check_schedule
@@ -39,6 +39,17 @@ EXPECTED_API_WARNINGS = (
     "Action mask numpy array is all zeros",
     "Action mask is a single number",
 )
+
+
+def unexpected_warnings(caught: list[warnings.WarningMessage]) -> list[str]:
+    """The messages of ``caught`` outside :data:`EXPECTED_API_WARNINGS` (deprecations aside)."""
+    return [
+        str(w.message)
+        for w in caught
+        if not str(w.message).startswith(EXPECTED_API_WARNINGS)
+        and not issubclass(w.category, DeprecationWarning)
+    ]
+
 
 #: The paper's proof of concept (appendix): 2 robots, 5 fixed tasks, queue of 2.
 POC_KWARGS: dict[str, Any] = {
@@ -67,9 +78,22 @@ def is_done(env: Any) -> bool:
     return bool(env.terminations[agent] or env.truncations[agent])
 
 
-def copy_obs(obs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def copy_obs(obs: dict[str, Any]) -> dict[str, Any]:
     """A deep copy (``robots`` is shared between agents of one decision)."""
-    return {key: value.copy() for key, value in obs.items()}
+    return {
+        key: copy_obs(value) if isinstance(value, dict) else value.copy()
+        for key, value in obs.items()
+    }
+
+
+def assert_same_obs(a: dict[str, Any], b: dict[str, Any]) -> None:
+    """Equal (nested) observations, array by array."""
+    assert a.keys() == b.keys()
+    for key in a:
+        if isinstance(a[key], dict):
+            assert_same_obs(a[key], b[key])
+        else:
+            np.testing.assert_array_equal(a[key], b[key])
 
 
 def play(
@@ -113,8 +137,7 @@ def assert_same_trajectory(a: list[tuple[Any, ...]], b: list[tuple[Any, ...]]) -
     for (agent_a, obs_a, *rest_a), (agent_b, obs_b, *rest_b) in zip(a, b, strict=True):
         assert agent_a == agent_b
         assert rest_a == rest_b
-        for key in obs_a:
-            np.testing.assert_array_equal(obs_a[key], obs_b[key])
+        assert_same_obs(obs_a, obs_b)
 
 
 def oracle_distance(navigator: str, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -138,7 +161,7 @@ def oracle_distance(navigator: str, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def test_pettingzoo_api_test(
     num_robots: int, queue_len: int, num_tasks: int, layout: Any, mode: str
 ) -> None:
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=num_robots,
         queue_len=queue_len,
         num_tasks=num_tasks,
@@ -148,13 +171,7 @@ def test_pettingzoo_api_test(
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         api_test(env, num_cycles=num_tasks + 1)
-    unexpected = [
-        str(w.message)
-        for w in caught
-        if not str(w.message).startswith(EXPECTED_API_WARNINGS)
-        and not issubclass(w.category, DeprecationWarning)
-    ]
-    assert unexpected == []
+    assert unexpected_warnings(caught) == []
 
 
 @pytest.mark.parametrize("navigator", ["sipp", "cbs"])
@@ -163,15 +180,15 @@ def test_collision_aware_env_passes_api_test_and_reports_executed_ttd(navigator:
     kwargs = {"num_robots": 10, "num_tasks": 30, "noise_mean": 0.0, "noise_var": 0.0}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        api_test(warehouse_v0.env(navigator=navigator, **kwargs), num_cycles=31)
-    env = warehouse_v0.env(navigator=navigator, **kwargs)
+        api_test(warehouse_v1.env(navigator=navigator, **kwargs), num_cycles=31)
+    env = warehouse_v1.env(navigator=navigator, **kwargs)
     env.reset(seed=1)
     for _ in env.agent_iter():
         obs, _, terminated, truncated, info = env.last()
         env.step(None if terminated or truncated else int(obs["action_mask"].argmax()))
     schedule = env.unwrapped.sim.schedule()
     check_schedule(env.unwrapped.sim.layout, schedule, expected_tasks=30)
-    assert info["episode"]["ttd"] == pytest.approx(float(schedule.task_ttd.sum()))
+    assert info["ttd"] == pytest.approx(float(schedule.task_ttd.sum()))
     assert len(schedule.tasks) == 30
 
 
@@ -181,7 +198,7 @@ def test_collision_aware_env_passes_api_test_and_reports_executed_ttd(navigator:
 )
 def test_pettingzoo_seed_test(num_robots: int, queue_len: int, layout: Any) -> None:
     seed_test(
-        lambda: warehouse_v0.env(
+        lambda: warehouse_v1.env(
             num_robots=num_robots, queue_len=queue_len, num_tasks=40, layout=layout
         ),
         num_cycles=50,
@@ -189,10 +206,10 @@ def test_pettingzoo_seed_test(num_robots: int, queue_len: int, layout: Any) -> N
 
 
 def test_registry_make_and_metadata() -> None:
-    assert rtaw_marl.ENV_ID == "rtaw/warehouse-v0"
-    env = pettingzoo.make("aec", "rtaw/warehouse-v0", num_robots=3)
-    assert isinstance(env.unwrapped, warehouse_v0.raw_env)
-    assert env.metadata["name"] == "rtaw_warehouse_v0"
+    assert rtaw_marl.ENV_ID == "rtaw/warehouse-v1"
+    env = pettingzoo.make("aec", "rtaw/warehouse-v1", num_robots=3)
+    assert isinstance(env.unwrapped, warehouse_v1.raw_env)
+    assert env.metadata["name"] == "rtaw_warehouse_v1"
     assert env.possible_agents == ["robot_0", "robot_1", "robot_2"]
     env.reset(seed=0)
     assert env.agents == env.possible_agents
@@ -213,7 +230,7 @@ def test_registry_make_and_metadata() -> None:
 def test_episode_takes_exactly_num_tasks_decisions(
     mode: str, num_robots: int, queue_len: int, num_tasks: int
 ) -> None:
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=num_robots,
         queue_len=queue_len,
         num_tasks=num_tasks,
@@ -245,7 +262,7 @@ def test_episode_takes_exactly_num_tasks_decisions(
         obs, reward, terminated, truncated, info = env.last()
         assert (terminated, truncated) == (expect_term, expect_trunc)
         assert not obs["action_mask"].any()
-        metrics = info["episode"]
+        metrics = info
         assert metrics["decisions"] == num_tasks
         assert metrics["tasks_served"] == num_tasks
         assert metrics["ttd"] == pytest.approx(-reward_sum, rel=1e-9, abs=1e-9)
@@ -266,15 +283,15 @@ def test_episode_takes_exactly_num_tasks_decisions(
     [("ttd", ("ttd",)), ("length", ("task_length",)), ("ttd_length", ("ttd", "task_length"))],
 )
 def test_reward_variants_sum_to_metrics(reward: str, expected: tuple[str, ...]) -> None:
-    env = warehouse_v0.env(num_robots=4, num_tasks=30, queue_len=5, reward=reward)
+    env = warehouse_v1.env(num_robots=4, num_tasks=30, queue_len=5, reward=reward)
     total, info = episode_return(env, seed=11)
-    metrics = info["episode"]
+    metrics = info
     assert total < 0
     assert -total == pytest.approx(sum(metrics[k] for k in expected), rel=1e-9)
 
 
 def test_reset_restarts_episode() -> None:
-    env = warehouse_v0.env(num_robots=3, num_tasks=8, queue_len=3)
+    env = warehouse_v1.env(num_robots=3, num_tasks=8, queue_len=3)
     first = trajectory(env, seed=4)
     again = trajectory(env, seed=4)  # after a finished episode
     assert_same_trajectory(first, again)
@@ -286,29 +303,37 @@ def test_reset_restarts_episode() -> None:
     assert not any(env.terminations.values())
     assert not any(env.truncations.values())
     assert env.unwrapped.sim.decisions == 0
-    np.testing.assert_array_equal(env.observe(first[0][0])["tasks"], first[0][1]["tasks"])
+    np.testing.assert_array_equal(
+        env.observe(first[0][0])["observation"]["tasks"], first[0][1]["observation"]["tasks"]
+    )
 
 
 # --------------------------------------------------------------------------- observations
 def test_observation_shapes_dtypes_and_space() -> None:
     m, n = 6, 4
-    env = warehouse_v0.env(num_robots=m, queue_len=n, num_tasks=20)
+    env = warehouse_v1.env(num_robots=m, queue_len=n, num_tasks=20)
     env.reset(seed=0)
     space = env.observation_space("robot_0")
-    keys = {"robots", "tasks", "agent", "relations", "rivals", "action_mask"}
-    assert set(space.spaces) == keys
+    keys = {"robots", "tasks", "agent", "relations", "rivals"}
+    assert set(space.spaces) == {"observation", "action_mask"}
+    assert set(space["observation"].spaces) == keys
     for agent in env.agents:
         obs = env.observe(agent)
-        assert set(obs) == keys
-        assert obs["relations"].shape == (n, 8)
-        assert obs["rivals"].shape == (n, 8, 4)
-        assert obs["relations"].dtype == obs["rivals"].dtype == np.float32
-        assert obs["robots"].shape == (m, 3)
-        assert obs["robots"].dtype == np.float32
-        assert obs["tasks"].shape == (n, 6)
-        assert obs["tasks"].dtype == np.float32
-        assert obs["agent"].shape == (3,)
-        assert obs["agent"].dtype == np.float32
+        assert set(obs) == {"observation", "action_mask"}
+        assert set(obs["observation"]) == keys
+        assert obs["observation"]["relations"].shape == (n, 8)
+        assert obs["observation"]["rivals"].shape == (n, 8, 4)
+        assert (
+            obs["observation"]["relations"].dtype
+            == obs["observation"]["rivals"].dtype
+            == np.float32
+        )
+        assert obs["observation"]["robots"].shape == (m, 3)
+        assert obs["observation"]["robots"].dtype == np.float32
+        assert obs["observation"]["tasks"].shape == (n, 6)
+        assert obs["observation"]["tasks"].dtype == np.float32
+        assert obs["observation"]["agent"].shape == (3,)
+        assert obs["observation"]["agent"].dtype == np.float32
         assert obs["action_mask"].shape == (n,)
         assert obs["action_mask"].dtype == np.int8
         assert space.contains(obs)
@@ -323,7 +348,7 @@ def test_observation_shapes_dtypes_and_space() -> None:
 def test_observation_values_match_state_and_scale(navigator: str) -> None:
     """Every agent's observation at every decision, against an independent oracle."""
     width, height = 23, 14  # L = max(W, H) = 23
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=5,
         queue_len=4,
         num_tasks=25,
@@ -346,16 +371,20 @@ def test_observation_values_match_state_and_scale(navigator: str) -> None:
         length = np.where(queued, oracle_distance(navigator, rows[:, :2], rows[:, 2:]), 0.0)
         for i, agent in enumerate(env.agents):
             obs = env.observe(agent)
-            np.testing.assert_allclose(obs["robots"], robots / 23.0, rtol=1e-6, atol=1e-7)
-            np.testing.assert_array_equal(obs["agent"], obs["robots"][i])
+            np.testing.assert_allclose(
+                obs["observation"]["robots"], robots / 23.0, rtol=1e-6, atol=1e-7
+            )
+            np.testing.assert_array_equal(
+                obs["observation"]["agent"], obs["observation"]["robots"][i]
+            )
             k = np.where(queued, oracle_distance(navigator, sim.robot_xy[i], rows[:, :2]), 0.0)
             expected = np.column_stack([rows, k, length]) / 23.0
-            np.testing.assert_allclose(obs["tasks"], expected, rtol=1e-6, atol=1e-7)
+            np.testing.assert_allclose(obs["observation"]["tasks"], expected, rtol=1e-6, atol=1e-7)
             if agent == env.agent_selection:
                 np.testing.assert_array_equal(obs["action_mask"], queued.astype(np.int8))
-                assert obs["agent"][2] == 0.0
+                assert obs["observation"]["agent"][2] == 0.0
                 # The selected robot is the lowest id among the robots free now.
-                assert i == int(np.flatnonzero(obs["robots"][:, 2] == 0.0)[0])
+                assert i == int(np.flatnonzero(obs["observation"]["robots"][:, 2] == 0.0)[0])
             else:
                 assert not obs["action_mask"].any()
             checked += 1
@@ -366,7 +395,7 @@ def test_observation_values_match_state_and_scale(navigator: str) -> None:
 
 def test_observation_dynamics_noise_free() -> None:
     """With noise off, the next observation follows from the previous one and the action."""
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=4,
         queue_len=5,
         num_tasks=40,
@@ -383,7 +412,7 @@ def test_observation_dynamics_noise_free() -> None:
     while not is_done(env):
         agent = env.agent_selection
         obs, *_ = env.last()
-        robots = obs["robots"].astype(np.float64) * scale
+        robots = obs["observation"]["robots"].astype(np.float64) * scale
         if prev is not None:
             p_agent, p_robots, p_task = prev
             actor = env.possible_agents.index(p_agent)
@@ -401,13 +430,13 @@ def test_observation_dynamics_noise_free() -> None:
             # The actor's reward is minus the chosen task's k.
             assert env.rewards[p_agent] == pytest.approx(-p_task[4], abs=1e-3)
         slot = int(rng.choice(np.flatnonzero(obs["action_mask"])))
-        prev = (agent, robots, obs["tasks"][slot].astype(np.float64) * scale)
+        prev = (agent, robots, obs["observation"]["tasks"][slot].astype(np.float64) * scale)
         env.step(slot)
 
 
 def test_drain_end_has_empty_masked_slots() -> None:
     num_tasks, queue_len = 9, 4
-    env = warehouse_v0.env(num_robots=2, queue_len=queue_len, num_tasks=num_tasks)
+    env = warehouse_v1.env(num_robots=2, queue_len=queue_len, num_tasks=num_tasks)
     env.reset(seed=5)
     decisions = 0
     saw_empty = False
@@ -417,8 +446,8 @@ def test_drain_end_has_empty_masked_slots() -> None:
         mask = obs["action_mask"].astype(bool)
         assert int(mask.sum()) == queue_len - empty
         # Empty slots are all-zero rows, and masked.
-        np.testing.assert_array_equal(obs["tasks"][~mask], 0.0)
-        assert (obs["tasks"][mask, 5] > 0).all()
+        np.testing.assert_array_equal(obs["observation"]["tasks"][~mask], 0.0)
+        assert (obs["observation"]["tasks"][mask, 5] > 0).all()
         saw_empty |= empty > 0
         # Choose the last valid slot so empty slots appear in the middle too.
         env.step(int(np.flatnonzero(mask)[-1]))
@@ -426,12 +455,12 @@ def test_drain_end_has_empty_masked_slots() -> None:
     assert saw_empty
     for agent in env.agents:
         obs = env.observe(agent)
-        np.testing.assert_array_equal(obs["tasks"], 0.0)
+        np.testing.assert_array_equal(obs["observation"]["tasks"], 0.0)
         assert not obs["action_mask"].any()
 
 
 def test_turn_order_ties_go_to_lowest_id() -> None:
-    env = warehouse_v0.env(num_robots=4, num_tasks=20, queue_len=3)
+    env = warehouse_v1.env(num_robots=4, num_tasks=20, queue_len=3)
     env.reset(seed=0)
     order = []
     for _ in range(4):
@@ -441,21 +470,21 @@ def test_turn_order_ties_go_to_lowest_id() -> None:
     # All robots are free at time 0: they act in id order first.
     assert order == ["robot_0", "robot_1", "robot_2", "robot_3"]
 
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=4, num_tasks=20, queue_len=3, robot_free_times=[3.0, 0.5, 2.0, 0.5]
     )
     env.reset(seed=0)
     obs, *_ = env.last()
     assert env.agent_selection == "robot_1"
     np.testing.assert_allclose(
-        obs["robots"][:, 2] * env.unwrapped.scale, [2.5, 0.0, 1.5, 0.0], atol=1e-5
+        obs["observation"]["robots"][:, 2] * env.unwrapped.scale, [2.5, 0.0, 1.5, 0.0], atol=1e-5
     )
     env.step(first_valid(obs))
     assert env.agent_selection == "robot_3"
 
 
 def test_same_seed_same_trajectory_and_seed_matters() -> None:
-    make = lambda: warehouse_v0.env(num_robots=5, num_tasks=30, queue_len=4)  # noqa: E731
+    make = lambda: warehouse_v1.env(num_robots=5, num_tasks=30, queue_len=4)  # noqa: E731
     a = trajectory(make(), seed=123)
     b = trajectory(make(), seed=123)
     assert_same_trajectory(a, b)
@@ -464,7 +493,7 @@ def test_same_seed_same_trajectory_and_seed_matters() -> None:
 
 
 def test_unseeded_reset_after_seeded_reset_is_reproducible() -> None:
-    make = lambda: warehouse_v0.env(num_robots=4, num_tasks=20, queue_len=3)  # noqa: E731
+    make = lambda: warehouse_v1.env(num_robots=4, num_tasks=20, queue_len=3)  # noqa: E731
     env_a, env_b = make(), make()
     seeded_a = trajectory(env_a, seed=9)
     seeded_b = trajectory(env_b, seed=9)
@@ -480,7 +509,7 @@ def test_unseeded_reset_after_seeded_reset_is_reproducible() -> None:
 
 
 def test_final_observation_k_is_from_current_cell_paper_mode() -> None:
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=2,
         num_tasks=3,
         queue_len=3,
@@ -497,15 +526,17 @@ def test_final_observation_k_is_from_current_cell_paper_mode() -> None:
     assert all(env.truncations.values())
     for agent in env.agents:
         obs = env.observe(agent)
-        robot = obs["agent"][:2].astype(np.float64) * 10
-        origins = obs["tasks"][:, :2].astype(np.float64) * 10
+        robot = obs["observation"]["agent"][:2].astype(np.float64) * 10
+        origins = obs["observation"]["tasks"][:, :2].astype(np.float64) * 10
         expected = oracle_distance("direct", robot, origins) / 10
-        np.testing.assert_allclose(obs["tasks"][:, 4], expected, rtol=1e-5, err_msg=agent)
+        np.testing.assert_allclose(
+            obs["observation"]["tasks"][:, 4], expected, rtol=1e-5, err_msg=agent
+        )
 
 
 # --------------------------------------------------------------------------- errors
 def _env_at_first_decision(**kwargs: Any) -> Any:
-    env = warehouse_v0.env(**kwargs)
+    env = warehouse_v1.env(**kwargs)
     env.reset(seed=0)
     return env
 
@@ -550,7 +581,7 @@ def test_none_action_for_live_agent_and_action_for_dead_agent_raise() -> None:
 
 
 #: Both ways to build the env: the wrapped ``env()`` and the bare ``raw_env``.
-FACTORIES = pytest.mark.parametrize("make", [warehouse_v0.env, warehouse_v0.raw_env])
+FACTORIES = pytest.mark.parametrize("make", [warehouse_v1.env, warehouse_v1.raw_env])
 
 #: Actions that are not an integer scalar, each with the words its error must contain.
 NOT_INTEGER_ACTIONS = [
@@ -647,11 +678,11 @@ def test_last_after_every_agent_is_done(make: Callable[..., Any], mode: str) -> 
     assert reward == 0.0
     assert (terminated, truncated) == ((True, False) if mode == "drain" else (False, True))
     assert info == finals[-1][5]
-    assert info["episode"]["decisions"] == 4
+    assert info["decisions"] == 4
     assert env.observation_space(env.agent_selection).contains(obs)
     assert not obs["action_mask"].any()
     assert env.last(observe=False)[0] is None
-    if make is warehouse_v0.raw_env:
+    if make is warehouse_v1.raw_env:
         with pytest.raises(InvalidActionError, match="call reset"):
             env.step(None)
     env.reset(seed=1)  # a new episode starts as usual
@@ -682,14 +713,16 @@ def test_last_after_every_agent_is_done(make: Callable[..., Any], mode: str) -> 
         ),
         ({"num_robots": 2, "robot_starts": [[0, 0]]}, ConfigError, ["robot_starts"]),
         ({"num_robots": 2, "robot_free_times": [0.0, -1.0]}, ConfigError, ["robot_free_times"]),
-        ({"render_mode": "human"}, ValueError, ["render_mode", "human"]),
+        ({"render_mode": "rgb_array"}, ConfigError, ["render_mode", "rgb_array", "ansi"]),
+        ({"observation": "local"}, ConfigError, ["observation", "'local'", "full", "compact"]),
+        ({"obs_format": "box"}, ConfigError, ["obs_format", "'box'", "dict", "flat"]),
     ],
 )
 def test_bad_kwargs_raise_config_errors(
     kwargs: dict[str, Any], error: type[Exception], words: list[str]
 ) -> None:
     with pytest.raises(error) as excinfo:
-        warehouse_v0.env(**kwargs)
+        warehouse_v1.env(**kwargs)
     message = str(excinfo.value)
     for word in words:
         assert word in message, f"{word!r} not in {message!r}"
@@ -700,10 +733,10 @@ def test_layout_file_errors_are_config_errors(tmp_path: Path) -> None:
     bad = tmp_path / "bad.cfg"
     bad.write_text("not a layout\n")
     with pytest.raises(ConfigError, match="environment:"):
-        warehouse_v0.env(layout=str(bad))
+        warehouse_v1.env(layout=str(bad))
     blocked = tmp_path / "tiny.txt"
     blocked.write_text("..@\n...\n")
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         layout=str(blocked), num_robots=1, robot_starts=[[2, 0]], tasks="random", num_tasks=3
     )
     with pytest.raises(LayoutError, match="obstacle"):
@@ -712,7 +745,7 @@ def test_layout_file_errors_are_config_errors(tmp_path: Path) -> None:
 
 # --------------------------------------------------------------------------- rendering
 def test_render_ansi_poc_layout() -> None:
-    env = warehouse_v0.env(render_mode="ansi", **POC_KWARGS)
+    env = warehouse_v1.env(render_mode="ansi", **POC_KWARGS)
     env.reset(seed=0)
     text = env.render()
     assert isinstance(text, str)
@@ -735,7 +768,7 @@ def test_render_ansi_poc_layout() -> None:
 
 
 def test_render_ansi_characters_and_obstacles() -> None:
-    env = warehouse_v0.env(render_mode="ansi", num_robots=6, num_tasks=12, queue_len=4)
+    env = warehouse_v1.env(render_mode="ansi", num_robots=6, num_tasks=12, queue_len=4)
     raw = env.unwrapped
     height, width = raw.sim.layout.obstacles.shape
     for _, _, _, terminated, truncated, _ in play(env, seed=3):
@@ -750,14 +783,14 @@ def test_render_ansi_characters_and_obstacles() -> None:
 
 
 def test_render_none_returns_none() -> None:
-    env = warehouse_v0.env(num_robots=2, num_tasks=5)
+    env = warehouse_v1.env(num_robots=2, num_tasks=5)
     env.reset(seed=0)
     assert env.render() is None
 
 
 # --------------------------------------------------------------------------- paper numbers
 def _poc_total(policy_name: str, seed: int) -> float:
-    env = warehouse_v0.env(**POC_KWARGS)
+    env = warehouse_v1.env(**POC_KWARGS)
     raw = env.unwrapped
     if policy_name == "mpdm":
         policy = MPDM(scale=raw.scale)
@@ -765,8 +798,8 @@ def _poc_total(policy_name: str, seed: int) -> float:
         policy = RBTS(navigator=raw.navigator, scale=raw.scale)
     policy.reset(seed)
     total, info = episode_return(env, choose=policy.act, seed=seed)
-    assert info["episode"]["ttd"] == pytest.approx(-total, rel=1e-12)
-    assert info["episode"]["tasks_served"] == 5
+    assert info["ttd"] == pytest.approx(-total, rel=1e-12)
+    assert info["tasks_served"] == 5
     return -total
 
 
@@ -778,7 +811,7 @@ def test_paper_proof_of_concept_ttd(policy_name: str, ttd: float, seed: int) -> 
 
 @pytest.mark.skipif(not USC_64.is_file(), reason=f"shared map {USC_64} not present")
 def test_usc_map_episode_with_mpdm() -> None:
-    env = warehouse_v0.env(num_robots=20, num_tasks=60, queue_len=10, layout=str(USC_64))
+    env = warehouse_v1.env(num_robots=20, num_tasks=60, queue_len=10, layout=str(USC_64))
     raw = env.unwrapped
     assert raw.scale == 64.0
     space = env.observation_space("robot_0")
@@ -790,8 +823,8 @@ def test_usc_map_episode_with_mpdm() -> None:
         return policy.act(obs)
 
     total, info = episode_return(env, choose=act, seed=0)
-    assert info["episode"]["tasks_served"] == 60
-    assert info["episode"]["ttd"] == pytest.approx(-total, rel=1e-9)
+    assert info["tasks_served"] == 60
+    assert info["ttd"] == pytest.approx(-total, rel=1e-9)
 
 
 # --------------------------------------------------------------------------- benchmark smoke

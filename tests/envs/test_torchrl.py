@@ -9,7 +9,7 @@ from tensordict import TensorDictBase
 from torchrl.collectors import Collector
 from torchrl.envs.utils import check_env_specs
 
-from rtaw_marl import warehouse_v0
+from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimSpec
@@ -45,18 +45,15 @@ def test_same_trajectory_as_aec_env(layout, navigator: str, tasks: str, mode: st
     rng = np.random.default_rng(0)
     aecs = []
     for b in range(2):
-        aec = warehouse_v0.raw_env(**env_cfg, layout=layout, navigator=navigator, tasks=tasks)
+        aec = warehouse_v1.raw_env(**env_cfg, layout=layout, navigator=navigator, tasks=tasks)
         aec.reset(seed=int(batched.episode_seeds[b]))
         aecs.append(aec)
     for _ in range(env_cfg["num_tasks"]):
         actions = []
         for b, aec in enumerate(aecs):
             obs = aec.observe(aec.agent_selection)
-            np.testing.assert_array_equal(obs["robots"], td["robots"][b].numpy())
-            np.testing.assert_array_equal(obs["tasks"], td["tasks"][b].numpy())
-            np.testing.assert_array_equal(obs["agent"], td["agent"][b].numpy())
-            np.testing.assert_array_equal(obs["relations"], td["relations"][b].numpy())
-            np.testing.assert_array_equal(obs["rivals"], td["rivals"][b].numpy())
+            for key in ("robots", "tasks", "agent", "relations", "rivals"):
+                np.testing.assert_array_equal(obs["observation"][key], td[key][b].numpy())
             np.testing.assert_array_equal(obs["action_mask"].astype(bool), td["action_mask"][b])
             actions.append(int(rng.choice(np.flatnonzero(obs["action_mask"]))))
         td["action"] = torch.tensor(actions)
@@ -67,7 +64,7 @@ def test_same_trajectory_as_aec_env(layout, navigator: str, tasks: str, mode: st
             assert out["next", "reward"][b, 0].item() == pytest.approx(aec.rewards[agent], abs=1e-4)
         td = out["next"]
     for b, aec in enumerate(aecs):
-        info = aec.infos[aec.agent_selection]["episode"]
+        info = aec.infos[aec.agent_selection]
         assert batched.sims[b].metrics().ttd == info["ttd"]
         assert bool(td["done"][b])
         assert bool(td["truncated"][b]) == (mode == "paper")

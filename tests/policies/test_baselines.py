@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from rtaw_marl import warehouse_v0
+from rtaw_marl import warehouse_v1
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies import (
     BASELINES,
@@ -142,7 +142,7 @@ def test_rbts_regret_by_hand() -> None:
     mpdm.reset(0)
     assert mpdm.act_sim(sim) == 0
     # The env's observation path agrees (RBTS needs the navigator there).
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=3,
         num_tasks=3,
         queue_len=3,
@@ -242,7 +242,7 @@ def _run_env(
     **env_keys: Any,
 ) -> tuple[list[int], float, float]:
     """Play one episode through the PettingZoo env with policy.act(obs)."""
-    env = warehouse_v0.env(
+    env = warehouse_v1.env(
         num_robots=num_robots,
         num_tasks=60,
         queue_len=5,
@@ -263,7 +263,7 @@ def _run_env(
         obs, reward, terminated, truncated, info = env.last()
         reward_sum += reward
         if terminated or truncated:
-            episode_ttd = info["episode"]["ttd"]
+            episode_ttd = info["ttd"]
             env.step(None)
             continue
         action = policy.act(obs)

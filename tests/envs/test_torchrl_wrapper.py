@@ -1,0 +1,124 @@
+"""``rtaw_warehouse_v1`` through TorchRL's ``PettingZooWrapper`` (the interop route).
+
+The wrapper as ``rtaw_marl/training/interop.py`` builds it (``use_mask=True``, all robots
+in one group): specs pass ``check_env_specs`` from one robot to a thousand, observations
+land under the keys the trainer reads, the episode metrics pass through as infos, and the
+benchmark script runs.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import pytest
+import torch
+from torchrl.envs import PettingZooWrapper
+from torchrl.envs.libs.pettingzoo import MarlGroupMapType
+from torchrl.envs.utils import check_env_specs
+
+from rtaw_marl import warehouse_v1
+from rtaw_marl.envs.pettingzoo import zero_info
+from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.training.interop import INTEROP_KEYS, make_interop_env
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+OPEN = {"name": "open", "width": 40, "height": 40}
+
+
+def wrapped(num_robots: int, observation: str, obs_format: str, **kwargs: Any) -> Any:
+    env = warehouse_v1.env(
+        num_robots=num_robots, queue_len=4, layout=OPEN, navigator="direct", tasks="random",
+        observation=observation, obs_format=obs_format, **{"num_tasks": 12, **kwargs},
+    )  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"PettingZoo in TorchRL is tested using")
+        return PettingZooWrapper(
+            env, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=0
+        )
+
+
+@pytest.mark.parametrize(
+    ("num_robots", "observation", "obs_format"),
+    [
+        (1, "full", "dict"),
+        (1, "compact", "flat"),
+        (10, "full", "dict"),
+        (10, "full", "flat"),
+        (10, "compact", "dict"),
+        (10, "compact", "flat"),
+        (1000, "compact", "flat"),
+    ],
+)
+def test_check_env_specs(num_robots: int, observation: str, obs_format: str) -> None:
+    env = wrapped(num_robots, observation, obs_format)
+    check_env_specs(env, seed=0)
+    td = env.reset()
+    features = td["agents", "observation", "observation"]
+    if obs_format == "flat":
+        assert features.shape == (num_robots, env.unwrapped.obs_layout.flat_size)
+    else:
+        expected = {"tasks", "agent", "relations", "rivals"} | (
+            {"robots"} if observation == "full" else set()
+        )
+        assert set(features.keys()) == expected
+    assert td["agents", "mask"].sum() == 1  # one robot acts
+
+
+def test_infos_pass_through_and_hold_the_final_metrics() -> None:
+    env = wrapped(2, "compact", "flat", num_tasks=3)
+    td = env.reset()
+    info = td["agents", "info"]
+    assert set(info.keys()) == set(zero_info())
+    assert all((info[key] == 0).all() for key in info.keys())  # noqa: SIM118 (rows otherwise)
+    aec = env.unwrapped  # the wrapper forwards to the AEC env: its raw env
+    for _ in range(3):
+        td["agents", "action"] = td["agents", "action_mask"].to(torch.uint8).argmax(-1)
+        out = env.step(td)
+        td = out["next"]
+    assert td["done"].item()
+    final = aec.sim.metrics().as_dict()
+    for key, value in final.items():
+        assert td["agents", "info", key] == pytest.approx(torch.full((2,), float(value)))
+    assert final["decisions"] == 3
+
+
+@pytest.mark.parametrize("model", ["rtaw", "rtaw_plus"])
+def test_interop_keys_name_entries_of_the_wrapped_env(model: str) -> None:
+    """Every input of both models' networks is a key of the interop env's tensordict."""
+    from rtaw_marl.models.checkpoint import build_networks
+    from rtaw_marl.models.config import RTAWConfig, RTAWPlusConfig
+
+    cfg = RTAWConfig() if model == "rtaw" else RTAWPlusConfig()
+    actor, critic = build_networks(cfg)
+    spec = SimSpec.of({"num_robots": 3, "num_tasks": 6, "queue_len": 4}, OPEN, "direct", "random")
+    td = make_interop_env(spec, seed=0).reset()
+    for net in (actor, critic):
+        for key in INTEROP_KEYS.observation(net.in_keys):
+            assert key in td.keys(True, True), key
+    assert INTEROP_KEYS.loss_mask in td.keys(True, True)
+
+
+def test_bench_wrapper_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``experiments/bench_wrapper.py``: its rows for M = 10, a few steps each."""
+    script = REPO_ROOT / "experiments" / "bench_wrapper.py"
+    spec = importlib.util.spec_from_file_location("bench_wrapper", script)
+    assert spec is not None
+    assert spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "bench_wrapper", bench)  # dataclasses look it up
+    spec.loader.exec_module(bench)
+    monkeypatch.setitem(bench.STEPS, 10, 20)
+    rows = bench.run_all((10,), repeats=1, quick=True)
+    assert [(r.env, r.observation, r.obs_format) for r in rows] == [
+        ("warehouse", "compact", "dict"),
+        ("warehouse", "compact", "flat"),
+        ("warehouse", "full", "dict"),
+        ("warehouse", "full", "flat"),
+        ("no-op", "compact", "flat"),
+    ]
+    assert all(row.median > 0 for row in rows)
+    assert "| warehouse | compact | flat | 10 |" in bench.render(rows, quick=True)
