@@ -119,6 +119,7 @@ def test_bench_wrapper_runs(monkeypatch: pytest.MonkeyPatch) -> None:
         ("warehouse", "full", "dict"),
         ("warehouse", "full", "flat"),
         ("no-op", "compact", "flat"),
+        ("no-op, no infos", "compact", "flat"),
     ]
     assert all(row.median > 0 for row in rows)
     assert "| warehouse | compact | flat | 10 |" in bench.render(rows, quick=True)
