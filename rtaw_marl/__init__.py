@@ -7,20 +7,32 @@ rtaw_marl import warehouse_v1`` does that), and at once if PettingZoo is already
 so ``import pettingzoo, rtaw_marl; pettingzoo.make("aec", "rtaw/warehouse-v1")`` works.
 PettingZoo has that registry from 1.27 on; with an earlier PettingZoo (>= 1.25, e.g. beside
 AgileRL) the env works the same and registration is skipped.
+
+The single-agent Gymnasium adapter (:mod:`rtaw_marl.envs.gymnasium`) registers the same
+way with Gymnasium, as ``rtaw/Warehouse-v1``: ``import gymnasium, rtaw_marl;
+gymnasium.make("rtaw/Warehouse-v1")`` works.
 """
 
 from __future__ import annotations
 
 import sys
 
-__all__ = ["ENV_ID", "__version__", "register_envs"]
+__all__ = ["ENV_ID", "GYMNASIUM_ENV_ID", "__version__", "register_envs"]
 __version__ = "0.1.0"
 ENV_ID = "rtaw/warehouse-v1"
+#: The single-agent Gymnasium adapter's id (Gymnasium's CamelCase convention).
+GYMNASIUM_ENV_ID = "rtaw/Warehouse-v1"
 
 
 def register_envs() -> None:
-    """Register ``rtaw/warehouse-v1`` in PettingZoo's AEC registry (idempotent; a no-op
-    before PettingZoo 1.27, which has no registry)."""
+    """Register ``rtaw/warehouse-v1`` in PettingZoo's AEC registry (a no-op before
+    PettingZoo 1.27, which has no registry) and ``rtaw/Warehouse-v1`` in Gymnasium's
+    (idempotent)."""
+    _register_pettingzoo()
+    _register_gymnasium()
+
+
+def _register_pettingzoo() -> None:
     try:
         from pettingzoo.env_registry.registration import aec_registry, register
     except ImportError:
@@ -30,5 +42,14 @@ def register_envs() -> None:
         register("aec", ENV_ID, entry_point="rtaw_marl.envs.pettingzoo:env")
 
 
+def _register_gymnasium() -> None:
+    import gymnasium
+
+    if GYMNASIUM_ENV_ID not in gymnasium.registry:
+        gymnasium.register(GYMNASIUM_ENV_ID, entry_point="rtaw_marl.envs.gymnasium:WarehouseEnv")
+
+
 if "pettingzoo" in sys.modules:
-    register_envs()
+    _register_pettingzoo()
+if "gymnasium" in sys.modules:
+    _register_gymnasium()
