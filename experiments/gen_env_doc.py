@@ -1,6 +1,10 @@
-"""Regenerate docs/environment.md from the env module's docstring (its spec page).
+"""Regenerate the env spec pages from the env modules' docstrings.
 
-Usage: ``python experiments/gen_env_doc.py`` (``--check`` exits 1 if the file is stale).
+* docs/environment.md: :mod:`rtaw_marl.envs.pettingzoo` (the PettingZoo AEC env), then a
+  hand-written "Integrations" block (:data:`INTEGRATIONS`);
+* docs/gymnasium.md: :mod:`rtaw_marl.envs.gymnasium` (the single-agent adapter).
+
+Usage: ``python experiments/gen_env_doc.py`` (``--check`` exits 1 if a page is stale).
 """
 
 from __future__ import annotations
@@ -8,30 +12,55 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from types import ModuleType
 
+import rtaw_marl.envs.gymnasium as gymnasium_env
 import rtaw_marl.envs.pettingzoo as warehouse
 
-DOC = Path(__file__).resolve().parents[1] / "docs" / "environment.md"
-HEADER = "<!-- Generated from rtaw_marl/envs/pettingzoo.py by experiments/gen_env_doc.py -->\n\n"
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+#: Appended to docs/environment.md: the library table lives in docs/integrations.md.
+INTEGRATIONS = """
+## Integrations
+
+Tianshou and TorchRL take this env as it is; Stable-Baselines3 (SB3-contrib's
+`MaskablePPO`) and other single-agent libraries take the Gymnasium adapter
+`rtaw/Warehouse-v1` ([gymnasium.md](gymnasium.md)), which returns each decision's own
+reward; SuperSuit's Box wrappers apply to the flat layout. There is no parallel version:
+robots act at irregular times, so PettingZoo's `aec_to_parallel` refuses the env.
+Versions tested, snippets and known limits: [integrations.md](integrations.md).
+"""
+
+#: Page name -> (module whose docstring it is, hand-written block after it).
+PAGES: dict[str, tuple[ModuleType, str]] = {
+    "environment.md": (warehouse, INTEGRATIONS),
+    "gymnasium.md": (gymnasium_env, ""),
+}
 
 
-def render() -> str:
-    """The markdown page: the module docstring under a generation notice."""
-    return HEADER + (warehouse.__doc__ or "").strip() + "\n"
+def render(module: ModuleType, extra: str = "") -> str:
+    """The markdown page: the module docstring under a generation notice, then ``extra``."""
+    source = "/".join(module.__name__.split(".")) + ".py"
+    header = f"<!-- Generated from {source} by experiments/gen_env_doc.py -->\n\n"
+    return header + (module.__doc__ or "").strip() + "\n" + extra
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--check", action="store_true", help="fail if docs/environment.md is stale")
+    parser.add_argument("--check", action="store_true", help="fail if a page is stale")
     args = parser.parse_args()
-    text = render()
-    if args.check:
-        if not DOC.is_file() or DOC.read_text() != text:
-            print(f"{DOC} is stale; run python experiments/gen_env_doc.py", file=sys.stderr)
-            return 1
-        return 0
-    DOC.write_text(text)
-    print(f"wrote {DOC}")
+    stale = []
+    for name, (module, extra) in PAGES.items():
+        doc, text = DOCS / name, render(module, extra)
+        if args.check:
+            if not doc.is_file() or doc.read_text() != text:
+                stale.append(str(doc))
+            continue
+        doc.write_text(text)
+        print(f"wrote {doc}")
+    if stale:
+        print(f"stale: {', '.join(stale)}; run python experiments/gen_env_doc.py", file=sys.stderr)
+        return 1
     return 0
 
 

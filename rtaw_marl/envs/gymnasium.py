@@ -1,10 +1,11 @@
-"""# RTAW Warehouse, single-agent Gymnasium adapter (``rtaw/Warehouse-v1``)
+"""# RTAW Warehouse, single-agent Gymnasium adapter (`rtaw/Warehouse-v1`)
 
-The warehouse of ``rtaw_warehouse_v1`` (docs/environment.md) as a Gymnasium ``Env``: one
-decision per ``step``, taken for whichever robot is free (one policy shared by every
-robot, the way the paper trains RTAW). For single-agent libraries: Stable-Baselines3 and
-SB3-contrib's ``MaskablePPO``, SuperSuit's Gymnasium wrappers, any ``gymnasium.Env``
-consumer.
+The warehouse of `rtaw_warehouse_v1` ([environment.md](environment.md)) as a Gymnasium
+`Env`: one decision per `step`, taken for whichever robot is free, so one policy serves
+every robot (the single decision stream that `rtaw-train`'s batched env also gives its
+shared policy). For single-agent libraries: Stable-Baselines3 and SB3-contrib's
+`MaskablePPO`, SuperSuit's Gymnasium wrappers, any `gymnasium.Env` consumer; versions
+tested and snippets: [integrations.md](integrations.md).
 
 | Import             | `from rtaw_marl.envs.gymnasium import WarehouseEnv`                     |
 |--------------------|-------------------------------------------------------------------------|
@@ -17,78 +18,80 @@ consumer.
 
 ## Registration
 
-Importing this module registers ``rtaw/Warehouse-v1`` with ``gymnasium.register`` (so does
-``from rtaw_marl import warehouse_v1``, ``rtaw_marl.register_envs()``, and importing
-``rtaw_marl`` after ``gymnasium``). ``gymnasium.make("rtaw_marl.envs.gymnasium:rtaw/Warehouse-v1")``
-works from a fresh interpreter. ``gymnasium.make`` adds Gymnasium's usual
-``PassiveEnvChecker`` and ``OrderEnforcing`` wrappers and no ``TimeLimit``.
+Importing this module registers `rtaw/Warehouse-v1` with `gymnasium.register`; so do
+`from rtaw_marl import warehouse_v1`, `rtaw_marl.register_envs()`, and importing
+`rtaw_marl` after `gymnasium`. From a fresh interpreter,
+`gymnasium.make("rtaw_marl.envs.gymnasium:rtaw/Warehouse-v1")` imports and registers in
+one call. `gymnasium.make` adds Gymnasium's usual `PassiveEnvChecker` and
+`OrderEnforcing` wrappers and no `TimeLimit`.
 
 ## Observation
 
-The acting robot's features, exactly the ``"observation"`` entry of the PettingZoo env's
-``observe(agent)`` for the selected agent (same options, same values; see
-docs/environment.md for every feature): ``obs_format="flat"`` (default) a float32 vector
-of ``3M + 46N + 3`` values (``observation="full"``, default) or ``46N + 3``
-(``observation="compact"``); ``obs_format="dict"`` a ``Dict`` of the feature arrays. The
-spaces are ``Box(-inf, inf)`` as in the PettingZoo env; ``env.unwrapped.obs_layout`` has
-``flat_slices`` and ``unflatten``. Each call returns new arrays. The robot the
-observation belongs to is ``env.unwrapped.sim.robot``.
+The acting robot's features, exactly the `"observation"` entry of the PettingZoo env's
+`observe(agent)` for the selected agent (same options, same values; every feature is in
+[environment.md](environment.md#observation)): with `obs_format="flat"` (default) a
+float32 vector of `3M + 46N + 3` values (`observation="full"`, default) or `46N + 3`
+(`observation="compact"`); with `obs_format="dict"` a `Dict` of the feature arrays. The
+spaces are `Box(-inf, inf)`, as in the PettingZoo env; `env.unwrapped.obs_layout` has
+`flat_slices` and `unflatten`. Every `reset` and `step` returns new arrays. The robot
+an observation belongs to is `env.unwrapped.sim.robot`.
 
 ## Action mask
 
-``info["action_mask"]`` (int8 ``[N]``, Gymnasium's ``Discrete.sample(mask=...)``
-convention) and ``action_masks()`` (bool ``[N]``, SB3-contrib's ``MaskablePPO``
+`info["action_mask"]` (int8 `[N]`, Gymnasium's `Discrete.sample(mask=...)`
+convention) and `action_masks()` (bool `[N]`, SB3-contrib's `MaskablePPO`
 convention): 1 for the slots holding a task. After the last decision it is all zeros.
 
 ## Actions
 
 A queue slot (a Python or NumPy integer): the acting robot takes that task. An empty or
 out-of-range slot, or anything that is not an integer, raises
-``rtaw_marl.errors.InvalidActionError`` and leaves the env as it was.
+`rtaw_marl.errors.InvalidActionError` and leaves the env as it was.
 
 ## Rewards
 
-The reward of the decision just taken: minus its travel delay (``reward="ttd"``; or the
-ablations ``"length"``, ``"ttd_length"``). It is what the simulator returns for the
-decision, not the PettingZoo ``step(); last()`` pattern, which would hand back the *next*
+The reward of the decision just taken: minus its travel delay (`reward="ttd"`; or the
+ablations `"length"`, `"ttd_length"`). It is what the simulator returns for the
+decision, not the PettingZoo `step(); last()` pattern, which would hand back the *next*
 robot's reward from its previous decision (the credit of another decision). Over an
-episode the rewards add up to minus ``info["ttd"]``.
+episode the rewards add up to minus `info["ttd"]`.
 
 ## Termination and truncation
 
-An episode is ``num_tasks`` steps. ``episode_mode="drain"`` (default): the last step is
-``terminated``; ``"paper"`` (the queue is always refilled): it is ``truncated``.
+An episode is `num_tasks` steps. `episode_mode="drain"` (default): the last step is
+`terminated`; `"paper"` (the queue is always refilled): it is `truncated`.
 
 ## Infos
 
-``info`` holds ``action_mask`` and the episode metrics as flat keys (``ttd``,
-``makespan``, ``task_length``, ``idle_mean``, ``idle_max``, ``wait_mean``, ``wait_max``,
-``tasks_served``, ``decisions``): zeros until the last step, the episode's metrics in the
-last step's ``info`` (the same keys at every step, for vectorised envs).
+`info` holds `action_mask` and the episode metrics as flat keys (`ttd`,
+`makespan`, `task_length`, `idle_mean`, `idle_max`, `wait_mean`, `wait_max`,
+`tasks_served`, `decisions`): zeros until the last step, the episode's metrics in the
+last step's `info` (the same keys at every step, for vectorised envs).
 
 ## Seeding
 
-``reset(seed=s)`` (``s`` an integer ``>= 0``, else ``ConfigError``) reseeds ``np_random``
-(Gymnasium's ``Env.reset``) and fixes the episode: the same episode as the PettingZoo
-env's ``reset(seed=s)``. ``reset()`` without a seed draws the episode seed from
-``np_random``, so a seeded sequence of episodes is reproducible.
+`reset(seed=s)` (`s` an integer `>= 0`, else `ConfigError`) reseeds `np_random`
+(Gymnasium's `Env.reset`) and fixes the episode: the same episode as the PettingZoo
+env's `reset(seed=s)`. `reset()` without a seed draws the episode seed from
+`np_random`, so a seeded sequence of episodes is reproducible.
 
 ## Rendering
 
-``render_mode="ansi"``: ``render()`` returns the grid as text (legend in
-docs/environment.md); ``"human"``: the text is printed at every ``reset`` and ``step``.
+`render_mode="ansi"`: `render()` returns the grid as text (legend in
+[environment.md](environment.md#rendering)); `"human"`: the text is printed at every
+`reset` and `step`.
 
 ## Arguments
 
-``WarehouseEnv(layout=None, navigator=None, tasks=None, render_mode=None,
-observation="full", obs_format="flat", **env)``: as the PettingZoo env's ``env(...)``
-(``**env`` the ``SimConfig`` keys ``num_robots``, ``num_tasks``, ``queue_len``,
-``episode_mode``, ``noise_mean``, ``noise_var``, ``reward``, ...), only ``obs_format``
-defaults to ``"flat"``; an unknown key or option is a ``ConfigError`` listing them.
+`WarehouseEnv(layout=None, navigator=None, tasks=None, render_mode=None,
+observation="full", obs_format="flat", **env)`: as the PettingZoo env's `env(...)`
+(`**env` the `SimConfig` keys `num_robots`, `num_tasks`, `queue_len`,
+`episode_mode`, `noise_mean`, `noise_var`, `reward`, ...), only `obs_format`
+defaults to `"flat"`; an unknown key or option is a `ConfigError` listing them.
 
 ## Version History
 
-* v1: initial release (the features of ``rtaw_warehouse_v1``).
+* v1: initial release (the features of `rtaw_warehouse_v1`).
 """
 
 from __future__ import annotations

@@ -36,10 +36,10 @@ the same robot may act several times in a row.
   `observation="compact"`: the same without `robots`, so its size does not depend on
   `M` (`rivals` summarises the other robots; the robot table is in `state()`).
 * `obs_format="dict"` (default): a dict of arrays; `obs_format="flat"`: one float32
-  vector for Box-only wrappers (SuperSuit's `flatten_v0`, `normalize_obs_v0`, ...): the
-  arrays flattened in C order and concatenated in the order listed, `3M + 46N + 3`
-  values (full) or `46N + 3` (compact). `env.unwrapped.obs_layout` has `flat_slices`
-  and `unflatten(vector)`.
+  vector, a Box for Box-only wrappers (SuperSuit's, once the entry is taken out of the
+  masked dict: docs/integrations.md): the arrays flattened in C order and concatenated
+  in the order listed, `3M + 46N + 3` values (full) or `46N + 3` (compact).
+  `env.unwrapped.obs_layout` has `flat_slices` and `unflatten(vector)`.
 
 Features are float32. Lengths and times are divided by the layout scale `L = max(W, H)`
 (robots move one cell per second); coordinates use `x` = column, `y` = row.
@@ -65,10 +65,11 @@ Features are float32. Lengths and times are divided by the layout scale `L = max
 
 The feature spaces are `Box(-inf, inf)` (the real ranges are above): TorchRL's
 `PettingZooWrapper` copies the bounds of all `M` agents once per agent per step, so
-finite bounds cost `O(M^2)` per step. `observation_spaces` and `action_spaces` map every
-agent to one shared space object. Arrays are shared until the next decision (`robots`
-between agents): copy one before modifying it. The acting robot's features are
-bit-identical to the batched TorchRL env's.
+finite bounds cost `O(M^2)` per step (a wrapper that needs finite bounds, such as
+SuperSuit's `normalize_obs_v0`, takes squashed features: docs/integrations.md).
+`observation_spaces` and `action_spaces` map every agent to one shared space object.
+Arrays are shared until the next decision (`robots` between agents): copy one before
+modifying it. The acting robot's features are bit-identical to the batched TorchRL env's.
 
 ## Action mask
 
