@@ -154,6 +154,7 @@ class WarehouseEnv(gymnasium.Env):
         self.observation_space = self.obs_layout.features_space()
         self.action_space = spaces.Discrete(spec.env.queue_len)
         self._views = AgentViews(self.sim, self.obs_layout)
+        self._robot = 0  # the robot of the last observation handed out
         self._mask = np.zeros(spec.env.queue_len, dtype=np.int8)
 
     def reset(
@@ -182,18 +183,18 @@ class WarehouseEnv(gymnasium.Env):
                 episode is over; the env is unchanged.
         """
         sim = self.sim
-        robot = sim.robot
         reward = sim.step(action)
         done = sim.done
-        # After the last decision the acting robot's own (final) view, with a zero mask.
+        # After the last decision: the acting robot's own (final) view, with a zero mask.
         obs, info = self._observe(
-            robot if done else sim.robot, sim.metrics().as_dict() if done else zero_info()
+            self._robot if done else sim.robot, sim.metrics().as_dict() if done else zero_info()
         )
         if self.render_mode == "human":
             self.render()
         return obs, reward, done and not sim.truncated, sim.truncated, info
 
     def _observe(self, robot: int, metrics: Info) -> tuple[Features, Info]:
+        self._robot = robot
         view = self._views.observe(robot)
         self._mask = view["action_mask"]
         return view["observation"], {"action_mask": self._mask, **metrics}
