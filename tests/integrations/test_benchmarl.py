@@ -4,6 +4,8 @@ MAPPO training on it for a few iterations (skipped without benchmarl)."""
 from __future__ import annotations
 
 import dataclasses
+import re
+from pathlib import Path
 
 import pytest
 import yaml
@@ -130,3 +132,11 @@ def test_mappo_trains_a_few_iterations(tmp_path) -> None:
     assert experiment.total_frames == 96
     after = experiment.policy.state_dict()
     assert any(not torch.equal(before[k], after[k]) for k in before)
+
+
+def test_docs_snippet_runs(tmp_path, monkeypatch, capsys) -> None:
+    page = Path(__file__).resolve().parents[2] / "docs" / "benchmarl.md"
+    (code,) = re.findall(r"```python\n(.*?)```", page.read_text(), re.S)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, str(page), "exec"), {"__name__": "snippet"})
+    assert capsys.readouterr().out.split()[-1] == "400"
