@@ -26,6 +26,8 @@ LAYERS = {
     "rtaw_marl.evaluation": 5,
     "rtaw_marl.viz": 5,
     "rtaw_marl.training": 6,
+    # Adapters to other libraries (BenchMARL): above the envs, beside training.
+    "rtaw_marl.integrations": 6,
     "rtaw_marl.config": 7,
     "rtaw_marl.cli": 8,
 }
