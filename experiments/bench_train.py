@@ -14,6 +14,13 @@ Usage::
     python experiments/bench_train.py --e2e-only   # the end-to-end table only
     python experiments/bench_train.py --train      # + wall time for rtaw-train to beat MPDM
     python experiments/bench_train.py --quick      # tiny sizes, a smoke run
+    python experiments/bench_train.py --backend ray  # local vs Ray actors, end to end
+
+``--backend ray`` runs only the end-to-end comparison: for M = 10 and 100, ``train()`` with
+the local backend (1 and 2 worker processes) and with ``collector=ray`` (1 and 2 actors on
+a local Ray cluster that each run starts, as ``rtaw-train collector=ray`` does), in one
+run, medians of ``--repeats`` runs; the learner's seconds per batch (GAE + update) bound
+the speed-up more collectors can give (docs/cluster.md).
 
 Prints markdown tables; ``--output PATH`` also writes them to a file. Medians of
 ``--repeats`` measurements taken in one run.
@@ -118,12 +125,15 @@ def bench_time_to_beat_mpdm(frames: int, every: int, algo: str) -> tuple[list[di
 PHASES = ("collect", "gae", "update", "sync", "eval_checkpoint")
 
 
-def bench_end_to_end(m: int, workers: int, frames: int, quick: bool) -> dict[str, float]:
+def bench_end_to_end(
+    m: int, workers: int, frames: int, quick: bool, backend: str = "local"
+) -> dict[str, float]:
     """One ``train()`` run; frames/s overall and in steady state, seconds per batch by phase."""
     from rtaw_marl.training.ppo import train
 
     overrides = [f"env.num_robots={m}", f"collector.workers={workers}", f"frames={frames}",
-                 f"eval.every_frames={frames // 2}", "progress=false"]  # fmt: skip
+                 f"eval.every_frames={frames // 2}", "progress=false",
+                 f"collector.backend={backend}"]  # fmt: skip
     if quick:
         overrides += ["algo.frames_per_batch=1024", "algo.minibatch_size=256"]
     cfg = to_typed(compose("train", overrides))
@@ -160,6 +170,30 @@ def end_to_end_table(quick: bool) -> list[str]:
     return lines
 
 
+def backend_table(quick: bool, repeats: int) -> list[str]:
+    """Local worker processes against Ray actors, end to end; medians of ``repeats``."""
+    lines = [
+        "| M | backend | collectors | frames | frames/s overall | frames/s steady | s per "
+        "batch: collect / GAE / update / sync / eval+ckpt | runs |",
+        "|---:|---|---:|---:|---:|---:|---|---:|",
+    ]
+    sizes = [(10, 8192)] if quick else [(10, 81920), (100, 40960)]
+    for m, frames in sizes:
+        for backend in ("local", "ray"):
+            for workers in (1, 2):
+                runs = [
+                    bench_end_to_end(m, workers, frames, quick, backend) for _ in range(repeats)
+                ]
+                r = {k: statistics.median(run[k] for run in runs) for k in runs[0]}
+                phases = " / ".join(f"{r[p]:.2f}" for p in PHASES)
+                lines.append(
+                    f"| {m} | {backend} | {workers} | {frames:,} | {r['overall']:,.0f} | "
+                    f"{r['steady']:,.0f} | {phases} | {len(runs)} |"
+                )
+                print(lines[-1], flush=True)
+    return lines
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="tiny sizes (smoke run)")
@@ -168,6 +202,10 @@ def main() -> int:
     parser.add_argument("--algo", default="ppo_fast", help="algo config for --train")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--e2e-only", action="store_true", help="only the end-to-end table")
+    parser.add_argument(
+        "--backend", choices=("local", "ray"), default="local",
+        help="ray: only the end-to-end table of local workers vs Ray actors",
+    )  # fmt: skip
     parser.add_argument("--output", type=Path, default=None)
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -175,8 +213,14 @@ def main() -> int:
         f"machine: {platform.platform()}, {torch.get_num_threads()} torch thread, "
         f"python {platform.python_version()}, torch {torch.__version__}",
         "",
-        *end_to_end_table(args.quick),
     ]
+    if args.backend == "ray":
+        lines += backend_table(args.quick, 1 if args.quick else args.repeats)
+        print("\n".join(lines))
+        if args.output:
+            args.output.write_text("\n".join(lines) + "\n")
+        return 0
+    lines += end_to_end_table(args.quick)
     if args.e2e_only:
         print("\n".join(lines))
         if args.output:

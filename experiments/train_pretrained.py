@@ -7,15 +7,29 @@ Usage::
     python experiments/train_pretrained.py --jobs 2 --plus # every RTAW+ entry, 2 at a time
     python experiments/train_pretrained.py --summary       # the shipped policies' figures
 
+    # The entries (default: all) as one `rtaw-train -m` sweep on a Hydra launcher:
+    python experiments/train_pretrained.py --launcher joblib
+    python experiments/train_pretrained.py --launcher ray --set hydra.launcher.ray.init.address=auto
+    python experiments/train_pretrained.py --launcher submitit_slurm \
+        --set hydra.launcher.partition=cpu --set hydra.launcher.cpus_per_task=4
+    python experiments/train_pretrained.py --launcher ray --print   # print the command only
+
 Each entry of ``rtaw_marl/policies/pretrained/registry.py`` names its ``rtaw-train`` overrides;
 this script runs exactly that command, then writes the best checkpoint, without the
 optimizer state (a few KB), to ``rtaw_marl/policies/pretrained/<name>.pt``. The checkpoint keeps
 the command line that trained it.
+
+With ``--launcher`` the entries run as one Hydra sweep, ``rtaw-train -m +zoo=<names>``
+(each entry is an option of the ``zoo`` config group, built from the registry), on the
+joblib, Ray or Slurm (submitit) launcher; each job trains into
+``runs/pretrained/sweep/<name>``, and the checkpoints are shipped when the sweep ends
+(docs/cluster.md).
 """
 
 from __future__ import annotations
 
 import argparse
+import shlex
 import shutil
 import subprocess
 import sys
@@ -27,6 +41,8 @@ from rtaw_marl.policies.pretrained.registry import PRETRAINED, train_command
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "rtaw_marl" / "policies" / "pretrained"
+SWEEP_DIR = ROOT / "runs" / "pretrained" / "sweep"
+LAUNCHERS = ("basic", "joblib", "ray", "submitit_local", "submitit_slurm")
 
 
 def train_one(name: str) -> str:
@@ -39,6 +55,21 @@ def train_one(name: str) -> str:
     log.parent.mkdir(parents=True, exist_ok=True)
     with log.open("w") as fh:
         subprocess.run(cmd, check=True, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT)
+    return ship(name, run_dir, cmd)
+
+
+def sweep_command(names: list[str], launcher: str, settings: list[str]) -> list[str]:
+    """``rtaw-train -m +zoo=<names>`` on ``launcher``: one job folder per entry."""
+    exe = str(Path(sys.executable).with_name("rtaw-train"))
+    return [
+        exe, "--multirun", f"+zoo={','.join(names)}", f"hydra/launcher={launcher}",
+        f"hydra.sweep.dir={SWEEP_DIR}", "hydra.sweep.subdir=${hydra:runtime.choices.zoo}",
+        "progress=false", *settings,
+    ]  # fmt: skip
+
+
+def ship(name: str, run_dir: Path, cmd: list[str]) -> str:
+    """Write the best checkpoint of ``run_dir`` into the package; returns a summary."""
     ckpt = load_checkpoint(run_dir / "checkpoints" / "best.pt")
     ckpt.pop("optimizer", None)
     ckpt["command"] = cmd
@@ -85,6 +116,14 @@ def main() -> int:
     parser.add_argument("--plus", action="store_true", help="only the RTAW+ entries")
     parser.add_argument("--paper", action="store_true", help="only the paper-network entries")
     parser.add_argument("--summary", action="store_true", help="print the shipped policies' table")
+    parser.add_argument(
+        "--launcher", choices=LAUNCHERS, help="train the entries as one rtaw-train -m sweep"
+    )
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE",
+        help="an extra override of the sweep (hydra.launcher.*, collector.*), repeatable",
+    )  # fmt: skip
+    parser.add_argument("--print", action="store_true", help="print the sweep command only")
     args = parser.parse_args()
     if args.summary:
         print(summary())
@@ -93,6 +132,16 @@ def main() -> int:
         n for n in PRETRAINED
         if not (args.plus and not n.endswith("_plus")) and not (args.paper and n.endswith("_plus"))
     ]  # fmt: skip
+    if args.launcher:
+        cmd = sweep_command(names, args.launcher, args.set)
+        print(shlex.join(cmd), flush=True)
+        if args.print:
+            return 0
+        shutil.rmtree(SWEEP_DIR, ignore_errors=True)
+        subprocess.run(cmd, check=True, cwd=ROOT)
+        for name in names:
+            print(ship(name, SWEEP_DIR / name, cmd), flush=True)
+        return 0
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         for line in pool.map(train_one, names):
             print(line, flush=True)

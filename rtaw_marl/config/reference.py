@@ -75,11 +75,13 @@ def _schemas() -> list[tuple[str, type]]:
         out.append((f"{app} (top level)", schema))
         out += _sections(app, schema)
     for group, options in GROUPS.items():
-        out += [(f"{group}={name}", schema) for name, schema in options.items()]
+        for name, schema in options.items():
+            out.append((f"{group}={name}", schema))
+            out += _sections(group, schema, sep=".")  # collector.ray.*
     return out
 
 
-def _sections(prefix: str, schema: type) -> list[tuple[str, type]]:
+def _sections(prefix: str, schema: type, sep: str = ": ") -> list[tuple[str, type]]:
     """Nested dataclass fields (``collector``, ``eval``, ``baselines``) as their own tables."""
     grouped = {cls for options in GROUPS.values() for cls in options.values()}
     out = []
@@ -87,7 +89,7 @@ def _sections(prefix: str, schema: type) -> list[tuple[str, type]]:
         if f.default_factory is not dataclasses.MISSING:
             value = f.default_factory()
             if dataclasses.is_dataclass(value) and type(value) not in grouped:
-                out.append((f"{prefix}: {f.name}.*", type(value)))
+                out.append((f"{prefix}{sep}{f.name}.*", type(value)))
     return out
 
 

@@ -13,14 +13,16 @@ import itertools
 import os
 from typing import Any
 
+import yaml
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig
 from rtaw_marl.models.config import MODELS
+from rtaw_marl.policies.pretrained.registry import PRETRAINED
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
-from rtaw_marl.training.config import PPOConfig, TrainConfig
+from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
 
 __all__ = ["GROUPS", "register_configs"]
 
@@ -32,6 +34,7 @@ GROUPS: dict[str, dict[str, type]] = {
     "tasks": dict(TASK_STREAMS),
     "model": dict(MODELS),
     "algo": {"ppo": PPOConfig},
+    "collector": {"default": CollectorConfig},
 }
 
 #: Primary configs -> their schema.
@@ -59,7 +62,29 @@ def register_configs() -> None:
             store.store(group=f"schema/{group}", name=name, node=_node(schema))
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
+    # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes as one sweep.
+    for name in PRETRAINED:
+        store.store(group="zoo", name=name, node=_zoo_node(PRETRAINED[name]), package="_global_")
     _registered = True
+
+
+def _zoo_node(overrides: list[str]) -> dict[str, Any]:
+    """A registry entry's ``rtaw-train`` overrides as a ``zoo`` option: its option
+    choices (``layout=A``) become ``override /layout`` entries of a defaults list, its
+    values (``env.num_robots=10``) a nested dict."""
+    defaults: list[Any] = []
+    values: dict[str, Any] = {}
+    for override in overrides:
+        key, _, text = override.partition("=")
+        if key in GROUPS or key == "scenario":
+            defaults.append({f"override /{key}": text})
+            continue
+        *parents, leaf = key.split(".")
+        node = values
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = yaml.safe_load(text)
+    return {"defaults": [*defaults, "_self_"], **values}
 
 
 _runs_in_process = itertools.count()

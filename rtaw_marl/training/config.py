@@ -13,7 +13,17 @@ from rtaw_marl.sim.inputs import seed_value
 from rtaw_marl.training.logging import LOGGERS
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
-__all__ = ["CollectorConfig", "ImitationConfig", "PPOConfig", "TrainConfig", "TrainEvalConfig"]
+__all__ = [
+    "CollectorConfig",
+    "ImitationConfig",
+    "PPOConfig",
+    "RayConfig",
+    "TrainConfig",
+    "TrainEvalConfig",
+]
+
+#: Values of ``device`` (the learner's).
+DEVICES = ("auto", "cpu", "cuda")
 
 #: Rules an imitation warm start can learn from.
 TEACHERS = ("lookahead", "hindsight")
@@ -75,20 +85,60 @@ class PPOConfig:
 
 
 @dataclass(kw_only=True)
-class CollectorConfig:
-    """How frames are collected (``collector.*``).
+class RayConfig:
+    """The Ray cluster of ``collector.backend=ray`` (``collector.ray.*``; docs/cluster.md).
 
     Attributes:
-        workers: Worker processes (a multi-process collector when > 1).
-        envs_per_worker: Simulators per worker, stepped as one batched env.
+        address: ``local`` starts a Ray cluster on this machine for the run and stops it
+            at the end; ``auto`` joins the cluster started on this machine by ``ray start
+            --head``; ``HOST:PORT`` joins the cluster whose head listens there;
+            ``ray://HOST:PORT`` connects through Ray Client. Inside a Ray job (Hydra's Ray
+            launcher) the job's own cluster is used.
+        cpus_per_actor: CPUs Ray reserves for each collector actor (fractions allowed).
+        connect_timeout_s: Seconds to wait for the cluster's head to answer.
     """
 
+    address: str = "local"
+    cpus_per_actor: float = 1.0
+    connect_timeout_s: float = 10.0
+
+    def __post_init__(self) -> None:
+        check_fields(self, "collector.ray.")
+        if not self.address.strip():
+            raise ConfigError("collector.ray.address must be local, auto or HOST:PORT")
+        for key in ("cpus_per_actor", "connect_timeout_s"):
+            check_number(f"collector.ray.{key}", getattr(self, key), above=0)
+
+
+#: Where ``collector.backend`` runs the collectors.
+BACKENDS = ("local", "ray")
+
+
+@dataclass(kw_only=True)
+class CollectorConfig:
+    """How frames are collected (``collector.*``; ``collector=ray`` sets the backend).
+
+    Attributes:
+        backend: ``local``: worker processes on this machine; ``ray``: Ray actors on a
+            cluster (``collector.ray.*``), the learner stays in this process.
+        workers: Collectors: worker processes (``local``; a multi-process collector when
+            > 1) or Ray actors (``ray``).
+        envs_per_worker: Simulators per worker or actor, stepped as one batched env.
+        ray: The Ray cluster (``backend=ray`` only).
+    """
+
+    backend: str = "local"
     workers: int = 1
     envs_per_worker: int = 64
+    ray: RayConfig = field(default_factory=RayConfig)
 
     def __post_init__(self) -> None:
         check_fields(self, "collector.")
         at_least(self, "collector.", 1, "workers", "envs_per_worker")
+        if self.backend not in BACKENDS:
+            raise ConfigError(
+                f"collector.backend must be one of {', '.join(BACKENDS)}, got {self.backend!r}"
+            )
 
 
 @dataclass(kw_only=True)
@@ -161,6 +211,9 @@ class TrainConfig(SimGroups):
         seed: Seed of the whole run (networks, sampling, episodes).
         frames: Total frames (decisions) to collect (the paper's budget: 4M).
         torch_threads: torch intra-op threads (1 is fastest for this small network).
+        device: Where the learner updates the networks: ``auto`` (``cuda`` when torch
+            finds a GPU, else ``cpu``), ``cpu`` or ``cuda``. Collection and evaluation
+            run on CPUs.
         collector: Collection settings.
         eval: Periodic greedy evaluation settings.
         imitation: The optional warm start by imitation.
@@ -181,6 +234,7 @@ class TrainConfig(SimGroups):
     seed: int = 0
     frames: int = 4_000_000
     torch_threads: int = 1
+    device: str = "auto"
     collector: CollectorConfig = field(default_factory=CollectorConfig)
     eval: TrainEvalConfig = field(default_factory=TrainEvalConfig)
     imitation: ImitationConfig = field(default_factory=ImitationConfig)
@@ -195,5 +249,7 @@ class TrainConfig(SimGroups):
         check_fields(self)
         seed_value(self.seed, "seed")
         at_least(self, "", 1, "frames", "torch_threads")
+        if self.device not in DEVICES:
+            raise ConfigError(f"device must be one of {', '.join(DEVICES)}, got {self.device!r}")
         if self.logger not in LOGGERS:
             raise ConfigError(f"logger must be one of {', '.join(LOGGERS)}, got {self.logger!r}")

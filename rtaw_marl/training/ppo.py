@@ -9,21 +9,18 @@ with checkpoints (last and best).
 
 from __future__ import annotations
 
-import signal
+import copy
 import time
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 
 import torch
 from tensordict import TensorDictBase
-from torchrl.collectors import Collector, MultiSyncCollector
 from torchrl.data import LazyTensorStorage, SamplerWithoutReplacement, TensorDictReplayBuffer
 from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value import GAE
 from tqdm import tqdm
 
-from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.checkpoint import Actor, Critic, build_networks
@@ -35,6 +32,7 @@ from rtaw_marl.training.checkpoints import (
     resume,
     trim_csv_logs,
 )
+from rtaw_marl.training.collectors import build_collector, learner_device
 from rtaw_marl.training.config import PPOConfig, TrainConfig
 from rtaw_marl.training.evaluator import Evaluator, greedy_ttd
 from rtaw_marl.training.imitation import imitate
@@ -43,7 +41,6 @@ from rtaw_marl.training.interop import (
     INTEROP_KEYS,
     TrainKeys,
     acting_reward,
-    make_interop_env,
     standardize_acting_advantage,
 )
 from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
@@ -127,7 +124,8 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     torch.set_num_threads(int(cfg.torch_threads))
     spec = cfg.sim_spec()
     keys = INTEROP_KEYS if cfg.interop else BATCHED_KEYS
-    learner = build_learner(cfg, keys)
+    device = learner_device(cfg.device)
+    learner = build_learner(cfg, keys, device)
     nets = (learner.actor_net, learner.critic_net)
     progress, history = Progress(), []
     if cfg.resume:
@@ -138,9 +136,10 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     logger = RunLogger(run_dir, cfg.logger)
     if cfg.imitation.teacher is not None and progress.frames == 0:
         _warm_start(cfg, spec, learner, logger, reward_scale)
-    collector = build_collector(cfg, spec, learner, keys, progress)
+    # Local worker processes or Ray actors; they act on CPUs, the learner on `device`.
+    collector = build_collector(cfg, spec, learner.loss.actor_network, device, progress)
     buffer = TensorDictReplayBuffer(
-        storage=LazyTensorStorage(cfg.algo.frames_per_batch),
+        storage=LazyTensorStorage(cfg.algo.frames_per_batch, device=device),
         sampler=SamplerWithoutReplacement(),
         batch_size=cfg.algo.minibatch_size,
     )
@@ -149,7 +148,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     start = time.perf_counter()
 
     def evaluate_and_save() -> None:
-        row = evaluator.run(learner.actor_net, progress, time.perf_counter() - start)
+        row = evaluator.run(_on_cpu(learner.actor_net), progress, time.perf_counter() - start)
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
         bar.set_postfix(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
         saver.save(row, evaluator.history)
@@ -168,7 +167,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
                 progress.frames += data.numel()
                 progress.iteration += 1
                 stats = _train_step(cfg, learner, buffer, data, keys, reward_scale, progress, clock)
-                collector.update_policy_weights_()
+                collector.sync()
                 clock.lap("time/sync_s")
                 done = progress.frames >= cfg.frames
                 if progress.frames >= next_eval or done:
@@ -211,12 +210,17 @@ def _interrupted(saver: Checkpoints, history: list[dict[str, float]]) -> str:
 def _warm_start(
     cfg: TrainConfig, spec: SimSpec, learner: Learner, logger: RunLogger, reward_scale: float
 ) -> None:
-    """Imitation rounds before PPO (their own episode seeds), logged as ``imitation/*``."""
+    """Imitation rounds before PPO (their own episode seeds, on CPU), logged as
+    ``imitation/*``."""
+    actor, critic = _on_cpu(learner.actor_net), _on_cpu(learner.critic_net)
     rows = imitate(
-        cfg.imitation, spec, learner.actor_net, learner.critic_net,
+        cfg.imitation, spec, actor, critic,
         num_envs=cfg.collector.envs_per_worker, seed=cfg.seed * 7919 + 104_729,
         gamma=cfg.algo.gamma, reward_scale=reward_scale,
     )  # fmt: skip
+    if actor is not learner.actor_net:  # a GPU learner: bring the warm start over
+        learner.actor_net.load_state_dict(actor.state_dict())
+        learner.critic_net.load_state_dict(critic.state_dict())
     for row in rows:
         logger.log({f"imitation/{k}": v for k, v in row.items() if k != "decisions"},
                    row["decisions"])  # fmt: skip
@@ -238,14 +242,18 @@ def _check(cfg: TrainConfig) -> None:
         )
     if cfg.interop and cfg.collector.workers != 1:
         raise ConfigError("interop=true runs one PettingZooWrapper env: set collector.workers=1")
+    if cfg.interop and cfg.collector.backend != "local":
+        raise ConfigError("interop=true runs in this process: set collector.backend=local")
     if cfg.frames < algo.frames_per_batch:
         raise ConfigError(f"frames={cfg.frames} is less than one batch ({algo.frames_per_batch})")
 
 
-def build_learner(cfg: TrainConfig, keys: TrainKeys) -> Learner:
-    """Actor and critic networks, the ClipPPO loss on explicit keys, GAE and Adam."""
+def build_learner(cfg: TrainConfig, keys: TrainKeys, device: torch.device | None = None) -> Learner:
+    """Actor and critic networks on ``device`` (CPU by default), the ClipPPO loss on
+    explicit keys, GAE and Adam."""
     algo = cfg.algo
-    actor_net, critic_net = build_networks(cfg.model)
+    device = device or torch.device("cpu")
+    actor_net, critic_net = (net.to(device) for net in build_networks(cfg.model))
     actor = make_actor(actor_net, keys.observation(actor_net.in_keys))
     critic = make_critic(critic_net, keys.observation(critic_net.in_keys))
     loss = ClipPPOLoss(
@@ -271,51 +279,20 @@ def build_learner(cfg: TrainConfig, keys: TrainKeys) -> Learner:
     loss.loss_mask_key = keys.loss_mask
     # shifted: one critic pass over [T + 1] steps instead of two over [T] (obs and next
     # obs); exact here, since next obs[t] is obs[t + 1] unless the episode ended at t.
-    gae = GAE(gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic, shifted=not cfg.interop)
+    gae = GAE(
+        gamma=algo.gamma, lmbda=algo.lmbda, value_network=critic, shifted=not cfg.interop,
+        device=device,
+    )  # fmt: skip
     gae.set_keys(**shared_keys)
     optim = torch.optim.Adam(loss.parameters(), lr=algo.lr)
     return Learner(actor_net, critic_net, loss, gae, optim)
 
 
-def build_collector(
-    cfg: TrainConfig, spec: SimSpec, learner: Learner, keys: TrainKeys, progress: Progress
-) -> Collector | MultiSyncCollector:
-    """One collector over ``collector.workers`` processes of batched simulators."""
-    workers, envs = cfg.collector.workers, cfg.collector.envs_per_worker
-    iteration = progress.iteration
-    # Env seeds depend on the resume point, so a resumed run sees new episodes.
-    seeds = [cfg.seed * 1009 + 31 * w + iteration for w in range(workers)]
-    if cfg.interop:
-        make_env = [partial(make_interop_env, spec, seed) for seed in seeds]
-    else:
-        make_env = [partial(_worker_env, spec, envs, seed, workers) for seed in seeds]
-    batch = cfg.algo.frames_per_batch
-    remaining = max(cfg.frames - progress.frames, batch)
-    kwargs = {
-        "frames_per_batch": batch,
-        "total_frames": -(-remaining // batch) * batch,
-        "auto_register_policy_transforms": False,
-    }
-    actor = learner.loss.actor_network
-    if workers == 1:
-        collector = Collector(make_env[0], actor, **kwargs)
-    else:
-        collector = MultiSyncCollector(make_env, actor, **kwargs)
-    collector.set_seed(cfg.seed + iteration)
-    return collector
-
-
-def _worker_env(spec: SimSpec, envs: int, seed: int, workers: int) -> BatchedWarehouseEnv:
-    """The batched env of one collector; a worker process runs its policy on one thread
-    (torch's default, one per core, oversubscribes the cores the workers share).
-
-    Worker processes ignore Ctrl-C: the terminal sends SIGINT to the whole process
-    group, and the main process alone must handle it (save, then shut the workers down).
-    """
-    if workers > 1:
-        torch.set_num_threads(1)
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-    return BatchedWarehouseEnv(spec, envs, seed)
+def _on_cpu(net: torch.nn.Module) -> torch.nn.Module:
+    """``net`` itself on a CPU learner, else a CPU copy (evaluation, imitation)."""
+    if next(net.parameters()).device.type == "cpu":
+        return net
+    return copy.deepcopy(net).cpu()
 
 
 # --------------------------------------------------------------------------- update

@@ -13,7 +13,7 @@ from rtaw_marl.config.store import APPS
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim import builder
 
-GROUP_DIRS = ("env", "layout", "navigator", "tasks", "model", "algo")
+GROUP_DIRS = ("env", "layout", "navigator", "tasks", "model", "algo", "collector")
 
 
 def _twins() -> list[tuple[str, str]]:
