@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import itertools
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -98,12 +101,33 @@ def test_two_task_setting_beats_mpdm_by_45_percent(train_cfg, tmp_path: Path) ->
     assert after > 0.9
 
 
+_FRESH = "RTAW_FRESH_PROCESS"
+
+
 def test_rtaw_plus_warm_started_on_lookahead_beats_mpdm_on_held_out_seeds(
     train_cfg, tmp_path: Path
 ) -> None:
     """Default scenario with 100-task episodes. Imitating lookahead (two DAgger rounds),
     then a little PPO: the greedy RTAW+ policy beats MPDM on the evaluation seeds 0-19,
-    paired, with a 95% interval above 0."""
+    paired, with a 95% interval above 0.
+
+    It runs in a fresh interpreter: in one full-suite run (2 xdist workers) it measured
+    +5.3% [-0.5, +11.1] against +7.8% [+2.9, +12.7] in every run alone, so state left by
+    an earlier test of the same worker changes this seeded run; what it measures must
+    not depend on the tests before it.
+    """
+    if os.environ.get(_FRESH) != "1":
+        name = "test_rtaw_plus_warm_started_on_lookahead_beats_mpdm_on_held_out_seeds"
+        test = f"{Path(__file__)}::{name}"
+        proc = subprocess.run(
+            [sys.executable, "-m", "pytest", test, "-q", "-p", "no:cacheprovider",
+             "--basetemp", str(tmp_path / "fresh")],
+            capture_output=True, text=True, timeout=1200, env={**os.environ, _FRESH: "1"},
+            cwd=Path(__file__).parents[2],
+        )  # fmt: skip
+        assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+        assert "1 passed" in proc.stdout
+        return
     cfg = train_cfg([
         "model=rtaw_plus", "algo=ppo", "env.num_tasks=100", "imitation.teacher=lookahead",
         "imitation.frames=8192", "imitation.rounds=2", "algo.frames_per_batch=2048",
