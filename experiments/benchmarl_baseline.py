@@ -18,7 +18,7 @@ gamma 0.99, GAE lambda 0.95, entropy 0.005 (rtaw-train anneals 0.01 -> 0.001; Be
 has no schedule). No warm start (BenchMARL has no imitation phase; RTAW+ had 65,536
 labelled decisions before its 409,600 PPO frames). Like the shipped RTAW policies, the
 greedy policy is evaluated on the selection seeds 1000-1009 every 81,920 frames (the RTAW
-runs: every 40,960; halved here for the wall time) and the
+runs: every 40,960; half as often here, for the wall time) and the
 best is kept (``best.pt``); ``final.pt`` is the last.
 
 ``evaluate`` plays the kept policy greedily on the PettingZoo env through the same
