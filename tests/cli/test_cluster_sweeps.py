@@ -84,3 +84,18 @@ def test_zoo_sweep_command_names_one_folder_per_entry() -> None:
     assert OmegaConf.to_container(cfg.hydra.sweep)["subdir"] == "${hydra:runtime.choices.zoo}"
     assert cfg.hydra.runtime.choices.zoo == "B_astar_m10_plus"
     assert cfg.model.name == "rtaw_plus"
+
+
+def test_device_cuda_without_a_gpu_is_one_line(cli, tmp_path: Path) -> None:
+    """``device=cuda`` where torch sees no GPU stops before any work; ``auto`` is CPU."""
+    torch = pytest.importorskip("torch")
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    result = cli("train", "scenario=poc", "device=cuda", f"output_dir={tmp_path}")
+    assert result.code == 2
+    assert result.err.strip() == (
+        "error: device=cuda but torch finds no CUDA device; use device=auto or cpu"
+    )
+    from rtaw_marl.training.collectors import learner_device
+
+    assert learner_device("auto").type == "cpu"
