@@ -12,6 +12,10 @@ $(STAMP): pyproject.toml
 	# .[dev] = the env, the cli and train extras, the test tools. torch is capped (<2.14):
 	# the local CPU wheel, never a new multi-GB CUDA build.
 	$(BIN)/pip install --quiet -e ".[dev]"
+	# BenchMARL 1.5.2 declares torchrl<0.12; its code runs on torchrl 0.14 through the
+	# alias in rtaw_marl/integrations/benchmarl.py, so it goes in without its declared
+	# dependencies (its real ones are in [train]; docs/benchmarl.md).
+	$(BIN)/pip install --quiet --no-deps benchmarl==1.5.2
 	touch $(STAMP)
 
 DEMO_RUN := runs/demo
