@@ -1,16 +1,21 @@
 """Throughput of the PettingZoo env through TorchRL's ``PettingZooWrapper`` (interop route).
 
-For each observation option (``full``, ``compact``), feature format (``dict``, ``flat``)
-and robot count ``M``, builds ``PettingZooWrapper(warehouse_v1.env(...), use_mask=True,
-group_map=MarlGroupMapType.ALL_IN_ONE_GROUP)`` as ``rtaw_marl/training/interop.py``
-does, and times ``env.step(td)`` with the first valid slot of the acting row's mask
-(an argmax over the mask tensor): steps per second, median of ``--repeats`` timed runs
-after a few warm-up steps, min-max spread beside it. Layout: a 60x60 open grid with the
-``direct`` navigator, queue ``N = 10``, designated tasks.
+For each wrapper, observation option (``full``, ``compact``), feature format (``dict``,
+``flat``) and robot count ``M``, wraps ``warehouse_v1.env(...)`` with all robots in one
+group and times ``env.step(td)`` with the first valid slot of the acting row's mask (an
+argmax over the mask tensor): steps per second, median of ``--repeats`` timed runs after
+a few warm-up steps, min-max spread beside it. Layout: a 60x60 open grid with the
+``direct`` navigator, queue ``N = 10``, designated tasks. Two wrappers:
 
-A ``no-op`` row runs the wrapper over an AEC env that does nothing, with the spaces of
-the compact flat observation and the same nine info keys: the wrapper's own cost per
-step, a ceiling for any env with this layout. ``no-op, no infos`` leaves the infos
+* ``stock``: TorchRL's ``PettingZooWrapper(env, use_mask=True,
+  group_map=MarlGroupMapType.ALL_IN_ONE_GROUP)``, which fills its output agent by agent;
+* ``vectorised``: :class:`rtaw_marl.envs.torchrl_wrapper.WarehouseWrapper`, the same
+  wrapper (a subclass, bit-identical output) filling every robot's row at once; what
+  ``rtaw_marl/training/interop.py`` builds.
+
+A ``no-op`` row runs the stock wrapper over an AEC env that does nothing, with the spaces
+of the compact flat observation and the same nine info keys: the stock wrapper's own
+cost per step, a ceiling for any env through it. ``no-op, no infos`` leaves the infos
 empty: the difference is what the wrapper spends copying infos, agent by agent.
 
 torch runs on one thread: the wrapper clones its ``[M, ...]`` output tensordict every
@@ -51,11 +56,14 @@ from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.observations import ObservationLayout
 from rtaw_marl.envs.pettingzoo import zero_info
+from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper
 
 QUEUE_LEN = 10
 LAYOUT = {"name": "open", "width": 60, "height": 60}
 #: Timed steps per run, per ``M`` (about a second or more each).
 STEPS = {10: 300, 100: 100, 1000: 10}
+#: The wrappers compared (``--wrappers``).
+WRAPPERS = ("stock", "vectorised")
 #: The issue's targets for the compact observation: ``M -> steps/s``.
 TARGETS = {100: 100.0, 1000: 10.0}
 
@@ -104,6 +112,7 @@ class Row:
     """One line of the result table."""
 
     env: str
+    wrapper: str
     observation: str
     obs_format: str
     robots: int
@@ -115,7 +124,9 @@ class Row:
         return statistics.median(self.samples)
 
 
-def wrap(aec: AECEnv) -> PettingZooWrapper:
+def wrap(aec: AECEnv, wrapper: str) -> PettingZooWrapper:
+    if wrapper == "vectorised":
+        return WarehouseWrapper(aec, seed=0)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r"PettingZoo in TorchRL is tested using")
         return PettingZooWrapper(
@@ -124,11 +135,11 @@ def wrap(aec: AECEnv) -> PettingZooWrapper:
 
 
 def measure(
-    make: Callable[[], AECEnv], label: tuple[str, str, str], m: int, steps: int, repeats: int
+    make: Callable[[], AECEnv], label: tuple[str, str, str, str], m: int, steps: int, repeats: int
 ) -> Row:
     """Build the wrapped env, then ``repeats`` timed runs of ``steps`` steps."""
     start = time.perf_counter()
-    env = wrap(make())
+    env = wrap(make(), label[1])
     row = Row(*label, m, time.perf_counter() - start)
     td = env.reset()
     for run in range(repeats + 1):
@@ -140,7 +151,7 @@ def measure(
             row.samples.append(steps / (time.perf_counter() - start))
     env.close()
     print(
-        f"  {row.env:<15} {row.observation:<8} {row.obs_format:<5} M={m:<5} "
+        f"  {row.env:<15} {row.wrapper:<10} {row.observation:<8} {row.obs_format:<5} M={m:<5} "
         f"{row.median:,.1f} steps/s (build {row.build_s:.2f} s)",
         file=sys.stderr,
         flush=True,
@@ -148,7 +159,9 @@ def measure(
     return row
 
 
-def run_all(robots: tuple[int, ...], repeats: int, quick: bool) -> list[Row]:
+def run_all(
+    robots: tuple[int, ...], repeats: int, quick: bool, wrappers: tuple[str, ...] = WRAPPERS
+) -> list[Row]:
     rows = []
     for m in robots:
         steps = max(STEPS[m] // 10, 3) if quick else STEPS[m]
@@ -160,23 +173,31 @@ def run_all(robots: tuple[int, ...], repeats: int, quick: bool) -> list[Row]:
                     layout=LAYOUT, navigator="direct", observation=observation,
                     obs_format=obs_format,
                 )  # fmt: skip
-                label = ("warehouse", observation, obs_format)
-                rows.append(measure(make, label, m, steps, repeats))
-        noop = ("no-op", "compact", "flat")
-        rows.append(measure(partial(NoOpEnv, m), noop, m, steps, repeats))
-        noop = ("no-op, no infos", "compact", "flat")
-        rows.append(measure(partial(NoOpEnv, m, infos=False), noop, m, steps, repeats))
+                for wrapper in wrappers:
+                    label = ("warehouse", wrapper, observation, obs_format)
+                    rows.append(measure(make, label, m, steps, repeats))
+        if "stock" in wrappers:
+            noop = ("no-op", "stock", "compact", "flat")
+            rows.append(measure(partial(NoOpEnv, m), noop, m, steps, repeats))
+            noop = ("no-op, no infos", "stock", "compact", "flat")
+            rows.append(measure(partial(NoOpEnv, m, infos=False), noop, m, steps, repeats))
     return rows
 
 
 def render(rows: list[Row], quick: bool) -> str:
+    """The markdown table; ``speed-up`` is vectorised over stock, both from this run."""
+    stock = {
+        (r.observation, r.obs_format, r.robots): r.median
+        for r in rows
+        if r.env == "warehouse" and r.wrapper == "stock"
+    }
     lines = [
-        "| env | observation | format | M | median steps/s | spread (min-max) | build s "
-        "| target | met |",
-        "|---|---|---|---:|---:|---|---:|---|---|",
+        "| env | wrapper | observation | format | M | median steps/s | spread (min-max) "
+        "| speed-up | build s | target | met |",
+        "|---|---|---|---|---:|---:|---|---:|---:|---|---|",
     ]
     for row in rows:
-        target, met = "", "-"
+        target, met, ratio = "", "-", ""
         if row.env == "warehouse" and row.observation == "compact" and row.robots in TARGETS:
             target = f">= {TARGETS[row.robots]:g}"
             met = (
@@ -184,10 +205,14 @@ def render(rows: list[Row], quick: bool) -> str:
                 if quick
                 else ("yes" if row.median >= TARGETS[row.robots] else "**no**")
             )
+        base = stock.get((row.observation, row.obs_format, row.robots))
+        if row.env == "warehouse" and row.wrapper == "vectorised" and base:
+            ratio = f"{row.median / base:,.1f}x"
         spread = f"{min(row.samples):,.1f}-{max(row.samples):,.1f}"
         lines.append(
-            f"| {row.env} | {row.observation} | {row.obs_format} | {row.robots} | "
-            f"{row.median:,.1f} | {spread} | {row.build_s:.2f} | {target} | {met} |"
+            f"| {row.env} | {row.wrapper} | {row.observation} | {row.obs_format} | "
+            f"{row.robots} | {row.median:,.1f} | {spread} | {ratio} | {row.build_s:.2f} | "
+            f"{target} | {met} |"
         )
     return "\n".join(lines)
 
@@ -198,6 +223,9 @@ def main(argv: list[str] | None = None) -> str:
     parser.add_argument("--quick", action="store_true", help="M = 10, 100 and few steps")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure")
     parser.add_argument("--output", type=Path, help="also write the report to this file")
+    parser.add_argument(
+        "--wrappers", nargs="+", choices=WRAPPERS, default=list(WRAPPERS), help="which to time"
+    )
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error("--repeats must be >= 1")
@@ -205,7 +233,8 @@ def main(argv: list[str] | None = None) -> str:
     repeats = 1 if args.quick else args.repeats
     load = os.getloadavg()[0]
     started = time.strftime("%Y-%m-%d %H:%M %Z")
-    rows = run_all((10, 100) if args.quick else (10, 100, 1000), repeats, args.quick)
+    robots = (10, 100) if args.quick else (10, 100, 1000)
+    rows = run_all(robots, repeats, args.quick, tuple(args.wrappers))
     report = "\n".join(
         [
             f"## PettingZooWrapper benchmark ({'quick smoke run' if args.quick else 'full run'})",

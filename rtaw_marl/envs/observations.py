@@ -42,6 +42,7 @@ __all__ = [
     "OBS_FORMATS",
     "QUEUE_STATE_FEATURES",
     "AgentViews",
+    "Features",
     "ObservationLayout",
     "state_vector",
 ]
@@ -210,6 +211,7 @@ class AgentViews:
         self._stamp = -1
         self._acting: Features | None = None
         self._others: Features | None = None
+        self._all: Features | None = None
 
     def observe(self, robot: int) -> dict[str, Any]:
         """``{"observation": features, "action_mask": int8 [N]}`` of ``robot``.
@@ -227,6 +229,29 @@ class AgentViews:
             self._others = self._other_views()
         return {"observation": self._pick(robot), "action_mask": self._zero_mask}
 
+    def observe_all(self) -> tuple[Features, np.ndarray]:
+        """Every robot's observation at once, in robot order.
+
+        Returns:
+            ``(features, masks)``: the features stacked over robots (``[M, ...]`` per key,
+            or ``[M, flat_size]``), each row equal to :meth:`observe`'s for that robot
+            (the acting row bit-identical), and the masks ``int8 [M, N]``. The arrays are
+            shared until the next decision (``robots`` may be a read-only broadcast view).
+        """
+        sim = self.sim
+        self._refresh()
+        if self._others is None:
+            self._others = self._other_views()
+        masks = np.zeros((sim.num_robots, sim.queue_len), dtype=np.int8)
+        if sim.done:
+            return self._others, masks
+        if self._acting is None:
+            self._acting = self._acting_view()
+        masks[sim.robot] = self._mask
+        if self._all is None:
+            self._all = _with_row(self._others, sim.robot, self._acting)
+        return self._all, masks
+
     def _refresh(self) -> None:
         """Per-decision inputs shared by every view."""
         sim = self.sim
@@ -239,7 +264,7 @@ class AgentViews:
         self._remaining = sim.robot_remaining()
         self._waits = sim.queue_waits()
         self._chain = sim.chain_distances()
-        self._acting = self._others = None
+        self._acting = self._others = self._all = None
         self._stamp = sim.decisions
 
     def _acting_view(self) -> Features:
@@ -286,3 +311,17 @@ class AgentViews:
             return others[robot]
         # robots is the same table for every agent: hand out the [M, 3] array itself.
         return {key: self._robot_rows if key == "robots" else others[key][robot] for key in others}
+
+
+def _with_row(stacked: Features, row: int, features: Features) -> Features:
+    """A copy of ``stacked`` whose ``row`` is ``features`` (``robots``, the same table for
+    every robot, is passed through as it is)."""
+    if isinstance(stacked, np.ndarray):
+        out = stacked.copy()
+        out[row] = features
+        return out
+    assert isinstance(features, dict)
+    copies = {key: value.copy() for key, value in stacked.items() if key != "robots"}
+    for key, value in copies.items():
+        value[row] = features[key]
+    return {key: copies.get(key, value) for key, value in stacked.items()}

@@ -164,7 +164,7 @@ from pettingzoo import AECEnv
 from pettingzoo.utils import wrappers
 
 from rtaw_marl import register_envs
-from rtaw_marl.envs.observations import AgentViews, ObservationLayout, state_vector
+from rtaw_marl.envs.observations import AgentViews, Features, ObservationLayout, state_vector
 from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimSpec, build_sim
@@ -311,6 +311,17 @@ class raw_env(AECEnv):
     def observe(self, agent: str) -> Observation:
         """``{"observation": features, "action_mask": int8 [N]}`` (module docstring)."""
         return self._views.observe(self._index[agent])
+
+    def observe_all(self) -> dict[str, Features]:
+        """Every agent's observation at once, in ``possible_agents`` order.
+
+        Returns:
+            ``{"observation": features, "action_mask": int8 [M, N]}``, the features
+            stacked over robots (``[M, ...]`` per key, or ``[M, flat_size]``); row ``i``
+            equals ``observe(possible_agents[i])``. Shared until the next decision.
+        """
+        features, masks = self._views.observe_all()
+        return {"observation": features, "action_mask": masks}
 
     def state(self) -> np.ndarray:
         """The global state ``float32 [3M + 7N]``: robot table, then queue rows."""

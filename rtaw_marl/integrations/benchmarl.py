@@ -4,8 +4,9 @@ BenchMARL's own PettingZoo tasks (``benchmarl/environments/pettingzoo/common.py`
 ``PettingZooEnv(parallel=True)`` over the library's MPE and SISL envs. This task follows
 the same :class:`~benchmarl.environments.TaskClass` pattern, with a typed schema
 (:class:`TaskConfig`, every field ``MISSING``) and its YAML (``conf/warehouse.yaml``
-beside this file), for the AEC warehouse env: ``PettingZooWrapper(warehouse_v1.env(...),
-use_mask=True)``, all robots in one group ``"agents"``, discrete actions only.
+beside this file), for the AEC warehouse env: ``WarehouseWrapper(warehouse_v1.env(...))``
+(TorchRL's ``PettingZooWrapper`` with ``use_mask=True``, every robot's row filled at
+once), all robots in one group ``"agents"``, discrete actions only.
 
 What BenchMARL gets from the env:
 
@@ -51,7 +52,6 @@ Install with ``pip install --no-deps benchmarl==1.5.2`` (docs/benchmarl.md).
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import MISSING, dataclass
 from pathlib import Path
@@ -62,10 +62,10 @@ import torchrl.collectors
 from omegaconf import OmegaConf
 from tensordict import TensorDictBase
 from torchrl.data import Composite
-from torchrl.envs import EnvBase, PettingZooWrapper, Transform
-from torchrl.envs.libs.pettingzoo import MarlGroupMapType
+from torchrl.envs import EnvBase, Transform
 
 from rtaw_marl.envs.pettingzoo import env as warehouse_env
+from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper
 
 
 def _install_collector_alias() -> None:
@@ -213,15 +213,7 @@ class WarehouseClass(TaskClass):
                 queue_len=config["queue_len"], episode_mode=config["episode_mode"],
                 **config["sim"],
             )  # fmt: skip
-            with warnings.catch_warnings():
-                # The wrapper warns on any PettingZoo but the one torchrl is tested with.
-                warnings.filterwarnings(
-                    "ignore", message=r"PettingZoo in TorchRL is tested", category=UserWarning
-                )
-                return PettingZooWrapper(
-                    aec, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP,
-                    categorical_actions=True, return_state=True, seed=seed, device=device,
-                )  # fmt: skip
+            return WarehouseWrapper(aec, return_state=True, seed=seed, device=device)
 
         return make
 

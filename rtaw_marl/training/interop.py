@@ -12,24 +12,24 @@ The env is built with ``observation="full"`` and ``obs_format="dict"``: ``model=
 reads the robot table ``robots`` in its actor and critic, and ``model=rtaw_plus`` in its
 critic, and the full observation carries it per agent. (The compact observation has no
 robot table; the wrapper's ``return_state`` would put ``state()`` at the root, outside
-the ``"agents"`` group the networks read.) The wrapper calls ``observe()`` for every
-robot every step, so the full observation costs ``O(M^2)`` per step: this route is for
-small ``M``; the batched native env is the fast route.
+the ``"agents"`` group the networks read.) The wrapper is
+:class:`~rtaw_marl.envs.torchrl_wrapper.WarehouseWrapper`, the ``PettingZooWrapper``
+subclass that fills every robot's row at once (bit-identical to the stock wrapper). The
+full observation still costs ``O(M^2)`` per step (``[M, M, 3]`` robot tables): this
+route is for small ``M``; the batched native env is the fast route.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import warnings
 from dataclasses import dataclass
 
 import torch
 from tensordict import TensorDictBase
 from tensordict.utils import NestedKey
-from torchrl.envs import PettingZooWrapper
-from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 
 from rtaw_marl.envs.pettingzoo import env as warehouse_env
+from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper
 from rtaw_marl.sim.builder import SimSpec
 
 __all__ = [
@@ -101,7 +101,7 @@ INTEROP_KEYS = TrainKeys(
 )
 
 
-def make_interop_env(spec: SimSpec, seed: int) -> PettingZooWrapper:
+def make_interop_env(spec: SimSpec, seed: int) -> WarehouseWrapper:
     """The AEC warehouse env in a ``PettingZooWrapper``, all robots in one group.
 
     Args:
@@ -113,15 +113,7 @@ def make_interop_env(spec: SimSpec, seed: int) -> PettingZooWrapper:
         layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks,
         observation="full", obs_format="dict", **env_keys,
     )  # fmt: skip
-    with warnings.catch_warnings():
-        # The wrapper warns on any PettingZoo but the one torchrl is tested with; the
-        # PettingZoo this package pins (pyproject.toml) is covered by its interop tests.
-        warnings.filterwarnings(
-            "ignore", message=r"PettingZoo in TorchRL is tested using version", category=UserWarning
-        )
-        return PettingZooWrapper(
-            aec, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=seed
-        )
+    return WarehouseWrapper(aec, seed=seed)
 
 
 def acting_reward(data: TensorDictBase, keys: TrainKeys) -> float:

@@ -1,9 +1,11 @@
 """``rtaw_warehouse_v1`` through TorchRL's ``PettingZooWrapper`` (the interop route).
 
-The wrapper as ``rtaw_marl/training/interop.py`` builds it (``use_mask=True``, all robots
-in one group): specs pass ``check_env_specs`` from one robot to a thousand, observations
-land under the keys the trainer reads, the episode metrics pass through as infos, and the
-benchmark script runs.
+The stock wrapper (``use_mask=True``, all robots in one group) and its vectorised
+subclass :class:`WarehouseWrapper`, which ``rtaw_marl/training/interop.py`` builds:
+specs pass ``check_env_specs`` from one robot to a thousand, the subclass's output is
+bit-identical to the stock wrapper's over whole rollouts, observations land under the
+keys the trainer reads, the episode metrics pass through as infos, and the benchmark
+script runs.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from torchrl.envs.utils import check_env_specs
 
 from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.pettingzoo import zero_info
+from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.interop import INTEROP_KEYS, make_interop_env
 
@@ -29,16 +32,24 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 OPEN = {"name": "open", "width": 40, "height": 40}
 
 
-def wrapped(num_robots: int, observation: str, obs_format: str, **kwargs: Any) -> Any:
-    env = warehouse_v1.env(
+def aec(num_robots: int, observation: str, obs_format: str, **kwargs: Any) -> Any:
+    return warehouse_v1.env(
         num_robots=num_robots, queue_len=4, layout=OPEN, navigator="direct", tasks="random",
         observation=observation, obs_format=obs_format, **{"num_tasks": 12, **kwargs},
     )  # fmt: skip
+
+
+def wrapped(
+    num_robots: int, observation: str, obs_format: str, return_state: bool = False, **kwargs: Any
+) -> Any:
+    """The stock wrapper."""
+    env = aec(num_robots, observation, obs_format, **kwargs)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r"PettingZoo in TorchRL is tested using")
         return PettingZooWrapper(
-            env, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=0
-        )
+            env, use_mask=True, group_map=MarlGroupMapType.ALL_IN_ONE_GROUP, seed=0,
+            return_state=return_state,
+        )  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -53,8 +64,14 @@ def wrapped(num_robots: int, observation: str, obs_format: str, **kwargs: Any) -
         (1000, "compact", "flat"),
     ],
 )
-def test_check_env_specs(num_robots: int, observation: str, obs_format: str) -> None:
-    env = wrapped(num_robots, observation, obs_format)
+@pytest.mark.parametrize("vectorised", [False, True], ids=["stock", "vectorised"])
+def test_check_env_specs(
+    num_robots: int, observation: str, obs_format: str, vectorised: bool
+) -> None:
+    if vectorised:
+        env = WarehouseWrapper(aec(num_robots, observation, obs_format), seed=0)
+    else:
+        env = wrapped(num_robots, observation, obs_format)
     check_env_specs(env, seed=0)
     td = env.reset()
     features = td["agents", "observation", "observation"]
@@ -66,6 +83,45 @@ def test_check_env_specs(num_robots: int, observation: str, obs_format: str) -> 
         )
         assert set(features.keys()) == expected
     assert td["agents", "mask"].sum() == 1  # one robot acts
+
+
+@pytest.mark.parametrize(
+    ("num_robots", "observation", "obs_format", "return_state"),
+    [
+        (1, "full", "dict", False),
+        (4, "full", "dict", True),
+        (4, "full", "flat", False),
+        (4, "compact", "dict", False),
+        (6, "compact", "flat", True),
+    ],
+)
+def test_vectorised_wrapper_equals_the_stock_wrapper(
+    num_robots: int, observation: str, obs_format: str, return_state: bool
+) -> None:
+    """Whole rollouts over several episodes (random masked actions, auto-reset): every
+    entry of every step is bit-identical, including masks, rewards, flags and infos."""
+    kwargs = {"num_tasks": 9, "episode_mode": "paper" if return_state else "drain"}
+    stock = wrapped(num_robots, observation, obs_format, return_state=return_state, **kwargs)
+    fast = WarehouseWrapper(
+        aec(num_robots, observation, obs_format, **kwargs), seed=0, return_state=return_state
+    )
+    rollouts = []
+    for env in (stock, fast):
+        torch.manual_seed(7)
+        rollouts.append(env.rollout(40, break_when_any_done=False))
+    expected, got = rollouts
+    assert expected["next", "done"].sum() >= 3  # episodes ended and restarted
+    assert set(got.keys(True, True)) == set(expected.keys(True, True))
+    for key in expected.keys(True, True):
+        assert got[key].dtype == expected[key].dtype, key
+        assert torch.equal(got[key], expected[key]), key
+
+
+def test_vectorised_wrapper_refuses_other_envs() -> None:
+    from pettingzoo.test.example_envs import generated_agents_env_v0
+
+    with pytest.raises(TypeError, match="wraps the rtaw_warehouse_v1 env"):
+        WarehouseWrapper(generated_agents_env_v0.env())
 
 
 def test_infos_pass_through_and_hold_the_final_metrics() -> None:
@@ -113,13 +169,18 @@ def test_bench_wrapper_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     spec.loader.exec_module(bench)
     monkeypatch.setitem(bench.STEPS, 10, 20)
     rows = bench.run_all((10,), repeats=1, quick=True)
-    assert [(r.env, r.observation, r.obs_format) for r in rows] == [
-        ("warehouse", "compact", "dict"),
-        ("warehouse", "compact", "flat"),
-        ("warehouse", "full", "dict"),
-        ("warehouse", "full", "flat"),
-        ("no-op", "compact", "flat"),
-        ("no-op, no infos", "compact", "flat"),
+    warehouse = [
+        ("warehouse", wrapper, observation, obs_format)
+        for observation in ("compact", "full")
+        for obs_format in ("dict", "flat")
+        for wrapper in ("stock", "vectorised")
+    ]
+    assert [(r.env, r.wrapper, r.observation, r.obs_format) for r in rows] == [
+        *warehouse,
+        ("no-op", "stock", "compact", "flat"),
+        ("no-op, no infos", "stock", "compact", "flat"),
     ]
     assert all(row.median > 0 for row in rows)
-    assert "| warehouse | compact | flat | 10 |" in bench.render(rows, quick=True)
+    report = bench.render(rows, quick=True)
+    assert "| warehouse | vectorised | compact | flat | 10 |" in report
+    assert "x |" in report  # the speed-up column, vectorised over stock
