@@ -23,7 +23,9 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 INTEGRATIONS = """
 ## Integrations
 
-Tianshou and TorchRL take this env as it is; Stable-Baselines3 (SB3-contrib's
+Tianshou and TorchRL take this env as it is (for TorchRL beyond a few dozen robots,
+`rtaw_marl.envs.torchrl_wrapper.WarehouseWrapper`: its `PettingZooWrapper` filling every
+robot's row at once, from `observe_all()`); Stable-Baselines3 (SB3-contrib's
 `MaskablePPO`) and other single-agent libraries take the Gymnasium adapter
 `rtaw/Warehouse-v1` ([gymnasium.md](gymnasium.md)), which returns each decision's own
 reward; SuperSuit's Box wrappers apply to the flat layout. There is no parallel version:

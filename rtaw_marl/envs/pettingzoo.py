@@ -41,6 +41,9 @@ the same robot may act several times in a row.
   in the order listed, `3M + 46N + 3` values (full) or `46N + 3` (compact).
   `env.unwrapped.obs_layout` has `flat_slices` and `unflatten(vector)`.
 
+`env.unwrapped.observe_all()` returns every agent's observation at once, stacked in
+`possible_agents` order: `{"observation": features [M, ...], "action_mask": [M, N]}`.
+
 Features are float32. Lengths and times are divided by the layout scale `L = max(W, H)`
 (robots move one cell per second); coordinates use `x` = column, `y` = row.
 

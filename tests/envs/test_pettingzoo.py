@@ -344,6 +344,32 @@ def test_observation_shapes_dtypes_and_space() -> None:
         assert space.contains(obs)
 
 
+@pytest.mark.parametrize(("observation", "obs_format"), [("full", "dict"), ("compact", "flat")])
+def test_observe_all_stacks_every_agents_observation(observation: str, obs_format: str) -> None:
+    """Row ``i`` of ``observe_all()`` is ``observe(possible_agents[i])``, bit for bit, at
+    every decision and at the episode's end (the acting row's mask included)."""
+    env = warehouse_v1.env(
+        num_robots=5, queue_len=4, num_tasks=12, observation=observation, obs_format=obs_format
+    )
+    env.reset(seed=3)
+    checked = 0
+    for agent in env.agent_iter():
+        stacked = env.unwrapped.observe_all()
+        for i, name in enumerate(env.possible_agents):
+            one = env.observe(name)
+            np.testing.assert_array_equal(stacked["action_mask"][i], one["action_mask"])
+            if obs_format == "flat":
+                np.testing.assert_array_equal(stacked["observation"][i], one["observation"])
+            else:
+                for key, value in one["observation"].items():
+                    np.testing.assert_array_equal(stacked["observation"][key][i], value)
+        checked += 1
+        _, _, terminated, truncated, _ = env.last()
+        mask = env.observe(agent)["action_mask"]
+        env.step(None if terminated or truncated else int(np.flatnonzero(mask)[0]))
+    assert checked == 12 + 5  # every decision, then every agent's final step
+
+
 @pytest.mark.parametrize("navigator", ["astar", "direct"])
 def test_observation_values_match_state_and_scale(navigator: str) -> None:
     """Every agent's observation at every decision, against an independent oracle."""
