@@ -106,7 +106,8 @@ def resume(
 
     Raises:
         ConfigError: The checkpoint is of another model, of another scenario (without
-            ``resume_new_scenario``), or already holds ``frames`` frames.
+            ``resume_new_scenario``), holds no optimizer state (a shipped policy), or
+            already holds ``frames`` frames.
     """
     path = Path(cfg.resume)
     ckpt = load_checkpoint(path)
@@ -114,6 +115,11 @@ def resume(
     if ckpt["model_config"] != model_cfg:
         raise ConfigError(
             f"resume: checkpoint model {ckpt['model_config']} differs from model {model_cfg}"
+        )
+    if "optimizer" not in ckpt:
+        raise ConfigError(
+            f"resume: {path} holds a policy's weights but no optimizer state (a shipped "
+            "policy is stripped); resume from a run's checkpoints/last.pt or best.pt"
         )
     frames = int(ckpt["frames"])
     if cfg.frames <= frames:

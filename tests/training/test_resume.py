@@ -103,6 +103,17 @@ def test_resume_needs_more_frames(train_cfg, tmp_path: Path) -> None:
         train(cfg, tmp_path / "b")
 
 
+def test_resume_from_a_shipped_policy_is_one_clear_error(train_cfg, tmp_path: Path) -> None:
+    """A shipped policy has no optimizer state: a ConfigError naming the way out, not a
+    KeyError from deep inside."""
+    from rtaw_marl.policies.pretrained.registry import pretrained_path
+
+    shipped = pretrained_path("shelves_astar_m10_plus")
+    cfg = train_cfg(["model=rtaw_plus", *TINY, "frames=1024", f"resume={shipped}"])
+    with pytest.raises(ConfigError, match="no optimizer state .* resume from a run's"):
+        train(cfg, tmp_path / "a")
+
+
 def test_best_is_written_before_last(train_cfg, tmp_path: Path, monkeypatch) -> None:
     """A kill between the two writes must not leave a last.pt claiming a missing best."""
     written: list[str] = []
