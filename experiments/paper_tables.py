@@ -101,13 +101,20 @@ def learned_entry(scenario: str, label: str) -> str | None:
     return name
 
 
+def scenario_of(job: dict[str, Any], label: str) -> str:
+    """The pretrained scenario of ``label`` in ``job``: ``job["pretrained"]`` is one
+    scenario for every learned label or a ``{label: scenario}`` mapping."""
+    pretrained = job["pretrained"]
+    return pretrained[label] if isinstance(pretrained, dict) else pretrained
+
+
 def wanted(job: dict[str, Any]) -> list[str]:
     """Labels a job evaluates: every rule (hindsight unless ``job["hindsight"]`` is
     false) and, with ``pretrained``, the learned policies that load; ``only`` keeps a
     subset of them."""
     labels = [b for b in BASELINES if b != "hindsight" or job.get("hindsight", True)]
     if job.get("pretrained"):
-        labels += [p for p in LEARNED if learned_entry(job["pretrained"], p)]
+        labels += [p for p in LEARNED if learned_entry(scenario_of(job, p), p)]
     return [p for p in labels if p in job.get("only", labels)]
 
 
@@ -120,7 +127,7 @@ def evaluate_setting(job: dict[str, Any]) -> dict[str, Any]:
         if label in BASELINES:
             policies[label] = make_baseline(BASELINES[label], sim.navigator, sim.layout.scale)
         else:
-            path = pretrained_path(job["pretrained"] + LEARNED[label])
+            path = pretrained_path(scenario_of(job, label) + LEARNED[label])
             policies[label] = load_policy(path, name=label)
     res = evaluate(sim, policies, job["seeds"]) if policies else {}
     return {
@@ -324,11 +331,13 @@ def table1(mode: str, seeds: list[int], workers: int, hindsight: bool, reuse: bo
     return section(results, [job["key"] for job in jobs])
 
 
+#: Table II settings: label, layout, navigator, pretrained scenario per learned label (the
+#: paper's network trained with 100 robots; RTAW+ continued with 500, a curriculum).
 TABLE2_SETTINGS = [
     ("Direct, open 300x300", {"name": "open", "width": 300, "height": 300}, "direct",
-     "open300_direct_m100_random"),
+     {"RTAW": "open300_direct_m100_random", "RTAW+": "open300_direct_m500_random"}),
     ("A*, layout C 256x256", {"name": "preset", "preset": "C", "width": 256, "height": 256},
-     "astar", "C256_astar_m100_random"),
+     "astar", {"RTAW": "C256_astar_m100_random", "RTAW+": "C256_astar_m500_random"}),
 ]  # fmt: skip
 
 

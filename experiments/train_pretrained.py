@@ -19,6 +19,10 @@ this script runs exactly that command, then writes the best checkpoint, without 
 optimizer state (a few KB), to ``rtaw_marl/policies/pretrained/<name>.pt``. The checkpoint keeps
 the command line that trained it.
 
+Curriculum entries (``CURRICULUM`` in the registry: Table II's 500-robot RTAW+) continue
+the best checkpoint of a 100-robot run in ``runs/pretrained/<base>``: they run after
+every other entry, and ``--launcher`` leaves them out.
+
 With ``--launcher`` the entries run as one Hydra sweep, ``rtaw-train -m +zoo=<names>``
 (each entry is an option of the ``zoo`` config group, built from the registry), on the
 joblib, Ray or Slurm (submitit) launcher; each job trains into
@@ -37,7 +41,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
-from rtaw_marl.policies.pretrained.registry import PRETRAINED, train_command
+from rtaw_marl.policies.pretrained.registry import CURRICULUM, PRETRAINED, train_command
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "rtaw_marl" / "policies" / "pretrained"
@@ -133,6 +137,15 @@ def main() -> int:
         if not (args.plus and not n.endswith("_plus")) and not (args.paper and n.endswith("_plus"))
     ]  # fmt: skip
     if args.launcher:
+        later = [n for n in names if n in CURRICULUM]
+        if later:
+            # They continue a base run in runs/pretrained/<base>, not in the sweep folder.
+            print(
+                f"note: left out of the sweep (curriculum entries; train them without "
+                f"--launcher once their base is trained): {', '.join(later)}",
+                flush=True,
+            )
+            names = [n for n in names if n not in CURRICULUM]
         cmd = sweep_command(names, args.launcher, args.set)
         print(shlex.join(cmd), flush=True)
         if args.print:
@@ -142,9 +155,11 @@ def main() -> int:
         for name in names:
             print(ship(name, SWEEP_DIR / name, cmd), flush=True)
         return 0
-    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        for line in pool.map(train_one, names):
-            print(line, flush=True)
+    # Curriculum entries continue their base's run: they start once every base is done.
+    for phase in ([n for n in names if n not in CURRICULUM], [n for n in names if n in CURRICULUM]):
+        with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+            for line in pool.map(train_one, phase):
+                print(line, flush=True)
     return 0
 
 

@@ -10,7 +10,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies.network import load_policy
-from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
+from rtaw_marl.policies.pretrained.registry import CURRICULUM, PRETRAINED, pretrained_path
 from rtaw_marl.sim.builder import SimSpec
 
 
@@ -28,6 +28,18 @@ def test_pretrained_checkpoint_is_shipped_and_describes_itself(name: str) -> Non
         assert ckpt["config"]["imitation"]["teacher"] == "lookahead"
     assert min(ckpt["config"]["eval"]["seeds"]) >= 1000
     assert ckpt["config"]["model"]["name"] == ("rtaw_plus" if name.endswith("_plus") else "rtaw")
+
+
+@pytest.mark.parametrize("name", sorted(CURRICULUM))
+def test_curriculum_policies_continue_their_base_with_500_robots(name: str) -> None:
+    """Table II's RTAW+ continues the shipped 100-robot policy (its frame count) with 500
+    robots, selected on seeds 1000+ of the 500-robot scenario."""
+    base, base_frames = CURRICULUM[name]
+    assert load_checkpoint(pretrained_path(base))["frames"] == base_frames
+    ckpt = load_checkpoint(pretrained_path(name))
+    assert ckpt["config"]["env"]["num_robots"] == 500
+    assert ckpt["config"]["resume"] == f"runs/pretrained/{base}/checkpoints/best.pt"
+    assert base_frames < ckpt["frames"] <= ckpt["config"]["frames"] == base_frames + 163_840
 
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from rtaw_marl.errors import ConfigError, unknown_name
 
-__all__ = ["PRETRAINED", "SCENARIOS", "pretrained_path", "train_command"]
+__all__ = ["CURRICULUM", "PRETRAINED", "SCENARIOS", "pretrained_path", "train_command"]
 
 #: The training scenario of each policy: layout, navigator, tasks and robot count.
 SCENARIOS: dict[str, list[str]] = {
@@ -53,6 +53,27 @@ _RTAW_PLUS = ["model=rtaw_plus", *_BUDGET]
 #: out of time; ``train_pretrained.py`` trains them once they are listed).
 _UNTRAINED_PAPER = ("D_astar_m100", "E_astar_m100")
 
+#: Table II's RTAW+ policies with 500 robots: a curriculum over ``M`` that continues the
+#: best checkpoint of the 100-robot run (``runs/pretrained/<base>``, so train the base with
+#: ``train_pretrained.py`` first) with 500 robots and 2,500-task episodes, 163,840 more
+#: PPO frames (``frames=`` counts from the base's best checkpoint), selected on seeds
+#: 1000-1004. name -> (base entry, its best checkpoint's frames).
+CURRICULUM: dict[str, tuple[str, int]] = {
+    "open300_direct_m500_random_plus": ("open300_direct_m100_random_plus", 368_640),
+    "C256_astar_m500_random_plus": ("C256_astar_m100_random_plus", 409_600),
+}
+
+
+def _curriculum(name: str, base: str, base_frames: int) -> list[str]:
+    scenario = [o for o in SCENARIOS[base.removesuffix("_plus")] if "num_robots" not in o]
+    return [
+        *scenario, "env.num_robots=500", "env.num_tasks=2500", "model=rtaw_plus", "algo=ppo",
+        f"frames={base_frames + 163_840}", "eval.every_frames=40960",
+        "eval.seeds=[1000,1001,1002,1003,1004]", "seed=0",
+        f"resume=runs/pretrained/{base}/checkpoints/best.pt", "resume_new_scenario=true",
+    ]  # fmt: skip
+
+
 PRETRAINED: dict[str, list[str]] = {
     **{
         name: [*scenario, *_RTAW]
@@ -60,6 +81,7 @@ PRETRAINED: dict[str, list[str]] = {
         if name not in _UNTRAINED_PAPER
     },
     **{f"{name}_plus": [*scenario, *_RTAW_PLUS] for name, scenario in SCENARIOS.items()},
+    **{name: _curriculum(name, *base) for name, base in CURRICULUM.items()},
 }
 
 
