@@ -47,12 +47,6 @@ _BUDGET = [
 _RTAW = ["model=rtaw", *_BUDGET]
 _RTAW_PLUS = ["model=rtaw_plus", *_BUDGET]
 
-#: name -> the rtaw-train overrides each checkpoint records (besides output_dir, progress):
-#: ``<scenario>`` is the paper's network, ``<scenario>_plus`` RTAW+.
-#: Paper-network entries not trained yet (the session that added the 100-robot rows ran
-#: out of time; ``train_pretrained.py`` trains them once they are listed).
-_UNTRAINED_PAPER = ("D_astar_m100", "E_astar_m100")
-
 #: Table II's RTAW+ policies with 500 robots: a curriculum over ``M`` that continues the
 #: best checkpoint of the 100-robot run (``runs/pretrained/<base>``, so train the base with
 #: ``train_pretrained.py`` first) with 500 robots and 2,500-task episodes, 163,840 more
@@ -74,12 +68,10 @@ def _curriculum(name: str, base: str, base_frames: int) -> list[str]:
     ]  # fmt: skip
 
 
+#: name -> the rtaw-train overrides each checkpoint records (besides output_dir, progress):
+#: ``<scenario>`` is the paper's network, ``<scenario>_plus`` RTAW+.
 PRETRAINED: dict[str, list[str]] = {
-    **{
-        name: [*scenario, *_RTAW]
-        for name, scenario in SCENARIOS.items()
-        if name not in _UNTRAINED_PAPER
-    },
+    **{name: [*scenario, *_RTAW] for name, scenario in SCENARIOS.items()},
     **{f"{name}_plus": [*scenario, *_RTAW_PLUS] for name, scenario in SCENARIOS.items()},
     **{name: _curriculum(name, *base) for name, base in CURRICULUM.items()},
 }
