@@ -59,6 +59,7 @@ from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.policies.pretrained.registry import pretrained_path
 from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.utils.atomic import atomic_write
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results.md"
@@ -433,7 +434,8 @@ def navigators(seeds: list[int], workers: int, hindsight: bool, reuse: bool) -> 
 def save(name: str, results: dict[Any, dict[str, Any]], seeds: list[int]) -> None:
     DATA.mkdir(parents=True, exist_ok=True)
     payload = {"seeds": seeds, "rows": {str(k): v["ttd"] for k, v in results.items()}}
-    (DATA / f"{name}.json").write_text(json.dumps(payload, indent=1) + "\n")
+    text = json.dumps(payload, indent=1) + "\n"
+    atomic_write(DATA / f"{name}.json", lambda fh: fh.write(text.encode()))
 
 
 def replace_section(name: str, body: str) -> None:
@@ -445,7 +447,8 @@ def replace_section(name: str, body: str) -> None:
     head, rest = text.split(begin, 1)
     _, tail = rest.split(end, 1)
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    RESULTS.write_text(f"{head}{begin}\n_Generated {stamp}._\n\n{body}\n{end}{tail}")
+    page = f"{head}{begin}\n_Generated {stamp}._\n\n{body}\n{end}{tail}"
+    atomic_write(RESULTS, lambda fh: fh.write(page.encode()))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -110,7 +110,7 @@ def test_resume_from_a_shipped_policy_is_one_clear_error(train_cfg, tmp_path: Pa
 
     shipped = pretrained_path("shelves_astar_m10_plus")
     cfg = train_cfg(["model=rtaw_plus", *TINY, "frames=1024", f"resume={shipped}"])
-    with pytest.raises(ConfigError, match="no optimizer state .* resume from a run's"):
+    with pytest.raises(ConfigError, match=r"no optimizer state .* resume from a run's"):
         train(cfg, tmp_path / "a")
 
 
