@@ -58,7 +58,7 @@ CURRICULUM: dict[str, tuple[str, int]] = {
 }
 
 
-def _curriculum(name: str, base: str, base_frames: int) -> list[str]:
+def _curriculum(base: str, base_frames: int) -> list[str]:
     scenario = [o for o in SCENARIOS[base.removesuffix("_plus")] if "num_robots" not in o]
     return [
         *scenario, "env.num_robots=500", "env.num_tasks=2500", "model=rtaw_plus", "algo=ppo",
@@ -73,7 +73,7 @@ def _curriculum(name: str, base: str, base_frames: int) -> list[str]:
 PRETRAINED: dict[str, list[str]] = {
     **{name: [*scenario, *_RTAW] for name, scenario in SCENARIOS.items()},
     **{f"{name}_plus": [*scenario, *_RTAW_PLUS] for name, scenario in SCENARIOS.items()},
-    **{name: _curriculum(name, *base) for name, base in CURRICULUM.items()},
+    **{name: _curriculum(*base) for name, base in CURRICULUM.items()},
 }
 
 
