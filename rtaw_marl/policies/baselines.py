@@ -70,10 +70,13 @@ class BaselinePolicy(ABC):
     def __init__(self, navigator: Navigator | None = None, scale: float = 1.0) -> None:
         self.navigator = navigator
         self.scale = float(scale)
-        self.rng = np.random.default_rng()
+        # Seeded from the start: a rule used without reset() still breaks ties the same
+        # way in every process (an unseeded teacher once made warm starts irreproducible).
+        self.reset(0)
 
     def reset(self, seed: int | None = None) -> None:
-        """Seed the tie-breaking generator (an independent stream of the episode seed)."""
+        """Seed the tie-breaking generator (an independent stream of the episode seed;
+        fresh entropy for ``None``)."""
         self.rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
 
     @abstractmethod

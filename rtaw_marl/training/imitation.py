@@ -71,6 +71,7 @@ def imitate(
         fitted ``accuracy`` and ``loss``.
     """
     teacher = make_baseline(cfg.teacher, params=BaselinesConfig())
+    teacher.reset(seed)  # its ties are broken by the run's seed, as everything else
     env = BatchedWarehouseEnv(spec, num_envs, seed=seed)
     steps = max(1, cfg.frames // (cfg.rounds * num_envs))
     keys = tuple(dict.fromkeys((*actor.in_keys, *critic.in_keys)))
