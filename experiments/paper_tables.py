@@ -326,7 +326,8 @@ def table1(mode: str, seeds: list[int], workers: int, hindsight: bool, reuse: bo
         for m in (10, 100):
             env = {"num_robots": m, "num_tasks": 500, "queue_len": 10, "episode_mode": mode}
             jobs.append({"key": f"{label}, M={m}", "env": env, "layout": layout,
-                         "navigator": nav, "tasks": "designated", "pretrained": pretrained[m],
+                         "navigator": nav, "tasks": "designated",
+                         "pretrained": {"RTAW": pretrained[m], "RTAW+": f"{pretrained[m]}_long"},
                          "seeds": seeds, "hindsight": hindsight})  # fmt: skip
     results = run_table(f"table1_{mode}", jobs, seeds, workers, reuse)
     return section(results, [job["key"] for job in jobs])

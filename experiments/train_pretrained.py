@@ -20,8 +20,10 @@ optimizer state (a few KB), to ``rtaw_marl/policies/pretrained/<name>.pt``. The 
 the command line that trained it.
 
 Curriculum entries (``CURRICULUM`` in the registry: Table II's 500-robot RTAW+) continue
-the best checkpoint of a 100-robot run in ``runs/pretrained/<base>``: they run after
-every other entry, and ``--launcher`` leaves them out.
+the best checkpoint of a 100-robot run in ``runs/pretrained/<base>``; continued entries
+(``CONTINUED``: Table I's RTAW+ at three times the budget) continue a copy of that run
+from its ``last.pt``. Both run after every other entry, and ``--launcher`` leaves them
+out.
 
 With ``--launcher`` the entries run as one Hydra sweep, ``rtaw-train -m +zoo=<names>``
 (each entry is an option of the ``zoo`` config group, built from the registry), on the
@@ -41,18 +43,28 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
-from rtaw_marl.policies.pretrained.registry import CURRICULUM, PRETRAINED, train_command
+from rtaw_marl.policies.pretrained.registry import (
+    CONTINUED,
+    CURRICULUM,
+    PRETRAINED,
+    train_command,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "rtaw_marl" / "policies" / "pretrained"
 SWEEP_DIR = ROOT / "runs" / "pretrained" / "sweep"
 LAUNCHERS = ("basic", "joblib", "ray", "submitit_local", "submitit_slurm")
+#: Entries that continue another entry's run in ``runs/pretrained/<base>``.
+STAGED = {*CURRICULUM, *CONTINUED}
 
 
 def train_one(name: str) -> str:
-    """Train entry ``name`` from scratch and ship its best checkpoint; returns a summary."""
+    """Train entry ``name`` (from scratch, or from a copy of its base's run) and ship its
+    best checkpoint; returns a summary."""
     run_dir = ROOT / "runs" / "pretrained" / name
     shutil.rmtree(run_dir, ignore_errors=True)
+    if name in CONTINUED:
+        shutil.copytree(ROOT / "runs" / "pretrained" / CONTINUED[name], run_dir)
     cmd = train_command(name, run_dir)
     print(" ".join(cmd), flush=True)
     log = ROOT / "runs" / "pretrained" / f"{name}.log"
@@ -137,15 +149,15 @@ def main() -> int:
         if not (args.plus and not n.endswith("_plus")) and not (args.paper and n.endswith("_plus"))
     ]  # fmt: skip
     if args.launcher:
-        later = [n for n in names if n in CURRICULUM]
+        later = [n for n in names if n in STAGED]
         if later:
             # They continue a base run in runs/pretrained/<base>, not in the sweep folder.
             print(
-                f"note: left out of the sweep (curriculum entries; train them without "
-                f"--launcher once their base is trained): {', '.join(later)}",
+                f"note: left out of the sweep (curriculum and continued entries; train "
+                f"them without --launcher once their base is trained): {', '.join(later)}",
                 flush=True,
             )
-            names = [n for n in names if n not in CURRICULUM]
+            names = [n for n in names if n not in STAGED]
         cmd = sweep_command(names, args.launcher, args.set)
         print(shlex.join(cmd), flush=True)
         if args.print:
@@ -155,8 +167,8 @@ def main() -> int:
         for name in names:
             print(ship(name, SWEEP_DIR / name, cmd), flush=True)
         return 0
-    # Curriculum entries continue their base's run: they start once every base is done.
-    for phase in ([n for n in names if n not in CURRICULUM], [n for n in names if n in CURRICULUM]):
+    # Staged entries continue their base's run: they start once every base is done.
+    for phase in ([n for n in names if n not in STAGED], [n for n in names if n in STAGED]):
         with ThreadPoolExecutor(max_workers=args.jobs) as pool:
             for line in pool.map(train_one, phase):
                 print(line, flush=True)

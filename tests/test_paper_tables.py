@@ -129,3 +129,49 @@ def test_a_missing_checkpoint_is_skipped_with_one_warning(monkeypatch, capsys):
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 2
     assert all(line.startswith("warning: RTAW") for line in err)
+
+
+def test_table1_pairs_the_long_rtaw_plus_with_the_paper_networks_base(fake, monkeypatch):
+    """Table I's RTAW+ column is each row's 1,228,800-frame policy; RTAW stays the base."""
+    loaded = set()
+
+    def entry(scenario, label):
+        loaded.add((label, scenario + pt.LEARNED[label]))
+        return scenario + pt.LEARNED[label]
+
+    monkeypatch.setattr(pt, "learned_entry", entry)
+    assert pt.main(["table1", "--seeds", "2"]) == 0
+    assert ("RTAW+", "C_astar_m100_long_plus") in loaded
+    assert ("RTAW", "C_astar_m100") in loaded
+    assert not any(name.endswith("_plus") and "_long" not in name for _, name in loaded)
+
+
+def test_budget_gain_pairs_each_row_with_its_base(fake, monkeypatch, capsys):
+    """experiments/budget_gain.py: the base RTAW+ of every row and mode, paired per seed
+    with Table I's stored columns."""
+    monkeypatch.syspath_prepend(str(ROOT / "experiments"))
+    monkeypatch.setitem(__import__("sys").modules, "paper_tables", pt)
+    spec = importlib.util.spec_from_file_location(
+        "budget_gain", ROOT / "experiments" / "budget_gain.py"
+    )
+    bg = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bg)
+    seeds = list(range(20))
+    rules = fake_ttd(["MPDM", "RBTS", "lookahead", "hungarian", "hindsight", "RTAW+"], seeds)
+    rows = {f"{label}, M={m}": rules for label, *_ in pt.ROWS for m in (10, 100)}
+    pt.DATA.mkdir()
+    for mode in ("paper", "drain"):
+        (pt.DATA / f"table1_{mode}.json").write_text(json.dumps({"seeds": seeds, "rows": rows}))
+
+    def evaluated(jobs, workers):  # the base is 2% worse than the long policy, every seed
+        for job in jobs:
+            yield {"key": job["key"], "ttd": {"RTAW+": [t / 0.98 for t in rules["RTAW+"]]}}
+
+    monkeypatch.setattr(pt, "evaluated", evaluated)
+    monkeypatch.setattr("sys.argv", ["budget_gain.py"])
+    assert bg.main() == 0
+    out = capsys.readouterr().out
+    assert out.count("| A* layout C, M=100 |") == 2  # paper and drain
+    assert "RTAW+ vs its base, pooled: +2.0% [+2.0, +2.0]* (n=480)" in out
+    saved = json.loads((pt.DATA / "budget_gain.json").read_text())
+    assert len(saved["rows"]) == 24

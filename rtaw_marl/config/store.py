@@ -19,7 +19,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig
 from rtaw_marl.models.config import MODELS
-from rtaw_marl.policies.pretrained.registry import PRETRAINED
+from rtaw_marl.policies.pretrained.registry import CONTINUED, PRETRAINED
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
@@ -63,7 +63,8 @@ def register_configs() -> None:
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
     # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes as one sweep.
-    for name in PRETRAINED:
+    # Continued entries are left out: they resume a copy of their base's run folder.
+    for name in (n for n in PRETRAINED if n not in CONTINUED):
         store.store(group="zoo", name=name, node=_zoo_node(PRETRAINED[name]), package="_global_")
     _registered = True
 

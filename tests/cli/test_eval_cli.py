@@ -334,7 +334,7 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     )
     assert cfg.hydra.sweeper.params == {"row": "direct,A,B,C,D,E", "env.num_robots": "10,100"}
     assert (cfg.layout.preset, cfg.navigator.name) == ("D", "astar")
-    assert list(cfg.pretrained) == ["D_astar_m10_plus", "D_astar_m10"]
+    assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10"]
     assert cfg.env.episode_mode == "paper"
     assert list(cfg.policy) == ["mpdm", "rbts", "rtaw"]
 

@@ -10,8 +10,15 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies.network import load_policy
-from rtaw_marl.policies.pretrained.registry import CURRICULUM, PRETRAINED, pretrained_path
+from rtaw_marl.policies.pretrained.registry import (
+    CONTINUED,
+    CURRICULUM,
+    LONG_FRAMES,
+    PRETRAINED,
+    pretrained_path,
+)
 from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.training.checkpoints import scenario_changes
 
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
@@ -40,6 +47,24 @@ def test_curriculum_policies_continue_their_base_with_500_robots(name: str) -> N
     assert ckpt["config"]["env"]["num_robots"] == 500
     assert ckpt["config"]["resume"] == f"runs/pretrained/{base}/checkpoints/best.pt"
     assert base_frames < ckpt["frames"] <= ckpt["config"]["frames"] == base_frames + 163_840
+
+
+@pytest.mark.parametrize("name", sorted(CONTINUED))
+def test_continued_policies_extend_their_base_run(name: str) -> None:
+    """Table I's RTAW+ at three times the budget is the shipped base's own run, continued
+    from its last checkpoint in a copy of its folder, same scenario and recipe."""
+    base = load_checkpoint(pretrained_path(CONTINUED[name]))
+    ckpt = load_checkpoint(pretrained_path(name))
+    command = ckpt["command"]
+    run_dir = next(c for c in command if c.startswith("output_dir=")).split("=", 1)[1]
+    assert f"resume={run_dir}/checkpoints/last.pt" in command
+    assert ckpt["config"]["frames"] == LONG_FRAMES == 3 * base["config"]["frames"]
+    # The same run: its selection history starts with the base's, up to the base's best.
+    assert ckpt["history"][: len(base["history"])] == base["history"]
+    assert ckpt["history"][-1]["frames"] >= ckpt["frames"] >= base["frames"]
+    assert scenario_changes(base["config"], ckpt["config"]) == []
+    for key in ("model", "algo", "imitation", "seed"):
+        assert ckpt["config"][key] == base["config"][key]
 
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))

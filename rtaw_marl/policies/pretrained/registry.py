@@ -13,7 +13,15 @@ from pathlib import Path
 
 from rtaw_marl.errors import ConfigError, unknown_name
 
-__all__ = ["CURRICULUM", "PRETRAINED", "SCENARIOS", "pretrained_path", "train_command"]
+__all__ = [
+    "CONTINUED",
+    "CURRICULUM",
+    "LONG_FRAMES",
+    "PRETRAINED",
+    "SCENARIOS",
+    "pretrained_path",
+    "train_command",
+]
 
 #: The training scenario of each policy: layout, navigator, tasks and robot count.
 SCENARIOS: dict[str, list[str]] = {
@@ -68,21 +76,41 @@ def _curriculum(base: str, base_frames: int) -> list[str]:
     ]  # fmt: skip
 
 
+#: Table I's RTAW+ policies at three times the budget: the base run continued from its
+#: ``last.pt`` (409,600 PPO frames) to :data:`LONG_FRAMES` with the same recipe, in a copy
+#: of its folder ``runs/pretrained/<base>`` (so train the base first):
+#: ``resume=<run_dir>/checkpoints/last.pt``. name -> base entry.
+LONG_FRAMES = 1_228_800
+CONTINUED: dict[str, str] = {
+    f"{scenario}_long_plus": f"{scenario}_plus"
+    for m in (10, 100)
+    for scenario in (f"open60_direct_m{m}", *(f"{p}_astar_m{m}" for p in "ABCDE"))
+}
+
+
+def _continued(base: str) -> list[str]:
+    budget = [o if not o.startswith("frames=") else f"frames={LONG_FRAMES}" for o in _RTAW_PLUS]
+    return [*SCENARIOS[base.removesuffix("_plus")], *budget]
+
+
 #: name -> the rtaw-train overrides each checkpoint records (besides output_dir, progress):
 #: ``<scenario>`` is the paper's network, ``<scenario>_plus`` RTAW+.
 PRETRAINED: dict[str, list[str]] = {
     **{name: [*scenario, *_RTAW] for name, scenario in SCENARIOS.items()},
     **{f"{name}_plus": [*scenario, *_RTAW_PLUS] for name, scenario in SCENARIOS.items()},
     **{name: _curriculum(*base) for name, base in CURRICULUM.items()},
+    **{name: _continued(base) for name, base in CONTINUED.items()},
 }
 
 
 def train_command(name: str, run_dir: Path) -> list[str]:
-    """The command that trains entry ``name`` into ``run_dir``."""
+    """The command that trains entry ``name`` into ``run_dir`` (for a :data:`CONTINUED`
+    entry, ``run_dir`` must hold a copy of its base's run)."""
     if name not in PRETRAINED:
         raise unknown_name("pretrained policy", name, list(PRETRAINED))
     exe = str(Path(sys.executable).with_name("rtaw-train"))
-    return [exe, *PRETRAINED[name], f"output_dir={run_dir}", "progress=false"]
+    resume = [f"resume={run_dir}/checkpoints/last.pt"] if name in CONTINUED else []
+    return [exe, *PRETRAINED[name], *resume, f"output_dir={run_dir}", "progress=false"]
 
 
 def pretrained_path(name: str) -> Path:

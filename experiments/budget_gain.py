@@ -1,0 +1,92 @@
+"""What three times the budget bought: Table I's RTAW+ against its own 409,600-frame base.
+
+Usage::
+
+    python experiments/paper_tables.py table1 --reuse   # first: Table I with the shipped policies
+    python experiments/budget_gain.py --workers 2
+
+Table I's RTAW+ column is each row's ``<scenario>_long_plus`` policy (1,228,800 PPO frames:
+the ``<scenario>_plus`` run continued from its last checkpoint; the registry's
+``CONTINUED``). This evaluates the base ``<scenario>_plus`` on the same rows, modes and
+seeds 0-19 and pairs it per seed with the stored Table I data
+(``docs/data/table1_<mode>.json``). Prints one markdown row per Table I row and mode, and
+stores the base's per-seed TTDs in ``docs/data/budget_gain.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+import paper_tables as pt
+
+from rtaw_marl.evaluation.stats import paired_difference
+from rtaw_marl.utils.atomic import atomic_write
+
+BASE = "RTAW+ 409,600"
+SEEDS = list(range(20))  # the evaluation seeds, as Table I
+HEADER = (
+    "| row | mode | RTAW+ vs its base | base vs lookahead -> RTAW+ vs lookahead "
+    "| hindsight share: base -> RTAW+ |\n|---|---|---|---|---|"
+)
+
+
+def cell(base: list[float], ttd: list[float]) -> str:
+    """``+x.x% [lo, hi]`` of ``ttd`` against ``base`` (``*``: the interval excludes 0)."""
+    d = paired_difference(base, ttd)
+    return f"{d.pct:+.1f}% [{d.pct_low:+.1f}, {d.pct_high:+.1f}]{'*' if d.significant else ''}"
+
+
+def share(row: dict[str, list[float]], ttd: list[float]) -> float:
+    """Percent of the MPDM -> hindsight gain that ``ttd`` captures."""
+    mpdm, hindsight = sum(row["MPDM"]), sum(row["hindsight"])
+    return 100 * (mpdm - sum(ttd)) / (mpdm - hindsight)
+
+
+def base_jobs(mode: str) -> list[dict[str, Any]]:
+    """Table I's jobs of ``mode``, evaluating only the base RTAW+ of each row."""
+    jobs = []
+    for label, layout, nav, pretrained in pt.ROWS:
+        for m in (10, 100):
+            env = {"num_robots": m, "num_tasks": 500, "queue_len": 10, "episode_mode": mode}
+            jobs.append({"key": f"{mode}|{label}, M={m}", "env": env, "layout": layout,
+                         "navigator": nav, "tasks": "designated", "policies": ("RTAW+",),
+                         "pretrained": {"RTAW+": pretrained[m]}, "seeds": SEEDS})  # fmt: skip
+    return jobs
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workers", type=int, default=1, help="evaluation processes")
+    args = parser.parse_args()
+    jobs = [*base_jobs("paper"), *base_jobs("drain")]
+    results = {r["key"]: r["ttd"]["RTAW+"] for r in pt.evaluated(jobs, args.workers)}
+    print(HEADER)
+    pooled: dict[str, list[float]] = {"base": [], "long": []}
+    for mode in ("paper", "drain"):
+        table = json.loads((pt.DATA / f"table1_{mode}.json").read_text())
+        if table["seeds"] != SEEDS:
+            raise SystemExit(f"error: table1_{mode}.json holds other seeds; regenerate Table I")
+        for key, row in table["rows"].items():
+            base, long = results[f"{mode}|{key}"], row["RTAW+"]
+            pooled["base"] += base
+            pooled["long"] += long
+            gain = paired_difference(row["lookahead"], base).pct
+            print(
+                f"| {key} | {mode} | {cell(base, long)} | {gain:+.1f}% -> "
+                f"{cell(row['lookahead'], long)} | {share(row, base):.0f}% -> "
+                f"{share(row, long):.0f}% |",
+                flush=True,
+            )
+    print(f"\nRTAW+ vs its base, pooled: {cell(pooled['base'], pooled['long'])} "
+          f"(n={len(pooled['base'])})")  # fmt: skip
+    payload = {"seeds": SEEDS, "label": BASE, "rows": results}
+    text = json.dumps(payload, indent=1) + "\n"
+    atomic_write(pt.DATA / "budget_gain.json", lambda fh: fh.write(text.encode()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
