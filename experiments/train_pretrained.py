@@ -116,9 +116,12 @@ def summary() -> str:
         ckpt = load_checkpoint(path)
         best = ckpt["eval"]
         look = best.get("lookahead_ttd", float("nan"))
+        # The run's budget from its recipe: a continued run may select its base's best,
+        # whose config still says the base's frames.
+        run = int(next(o for o in PRETRAINED[name] if o.startswith("frames=")).split("=")[1])
         lines.append(
             f"| {name} | {ckpt['config']['model'].get('name', 'rtaw')} | {ckpt['frames']:,} / "
-            f"{ckpt['config']['frames']:,} | {best['ttd']:.0f} | {best['mpdm_ttd']:.0f} | "
+            f"{run:,} | {best['ttd']:.0f} | {best['mpdm_ttd']:.0f} | "
             f"{look:.0f} | {100 * (1 - best['ttd'] / best['mpdm_ttd']):+.1f}% | "
             f"{100 * (1 - best['ttd'] / look):+.1f}% | [png](img/training_{name}.png) |"
         )

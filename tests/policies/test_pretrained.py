@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import torch
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate
@@ -58,10 +59,17 @@ def test_continued_policies_extend_their_base_run(name: str) -> None:
     command = ckpt["command"]
     run_dir = next(c for c in command if c.startswith("output_dir=")).split("=", 1)[1]
     assert f"resume={run_dir}/checkpoints/last.pt" in command
-    assert ckpt["config"]["frames"] == LONG_FRAMES == 3 * base["config"]["frames"]
+    assert f"frames={LONG_FRAMES}" in command and LONG_FRAMES == 3 * base["config"]["frames"]
     # The same run: its selection history starts with the base's, up to the base's best.
     assert ckpt["history"][: len(base["history"])] == base["history"]
     assert ckpt["history"][-1]["frames"] >= ckpt["frames"] >= base["frames"]
+    if ckpt["frames"] == base["frames"]:  # no later evaluation beat the base's best
+        assert ckpt["model"]["actor"].keys() == base["model"]["actor"].keys()
+        assert all(
+            torch.equal(v, base["model"]["actor"][k]) for k, v in ckpt["model"]["actor"].items()
+        )
+    else:  # a checkpoint of the continuation itself
+        assert ckpt["config"]["frames"] == LONG_FRAMES
     assert scenario_changes(base["config"], ckpt["config"]) == []
     for key in ("model", "algo", "imitation", "seed"):
         assert ckpt["config"][key] == base["config"][key]
