@@ -4,6 +4,7 @@ Usage::
 
     python experiments/paper_tables.py table1 --reuse   # first: Table I with the shipped policies
     python experiments/budget_gain.py --workers 2
+    python experiments/budget_gain.py --reuse   # pair again, reusing the stored base TTDs
 
 Table I's RTAW+ column is each row's ``<scenario>_long_plus`` policy (1,228,800 PPO frames:
 the ``<scenario>_plus`` run continued from its last checkpoint; the registry's
@@ -57,12 +58,25 @@ def base_jobs(mode: str) -> list[dict[str, Any]]:
     return jobs
 
 
+def stored(keys: list[str]) -> dict[str, list[float]]:
+    """The base TTDs of docs/data/budget_gain.json when it holds ``keys`` on SEEDS, else {}."""
+    path = pt.DATA / "budget_gain.json"
+    payload = json.loads(path.read_text()) if path.is_file() else {}
+    if payload.get("seeds") != SEEDS or sorted(payload.get("rows", {})) != sorted(keys):
+        print(f"warning: --reuse: {path} is missing or holds other rows", file=sys.stderr)
+        return {}
+    return payload["rows"]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=1, help="evaluation processes")
+    parser.add_argument("--reuse", action="store_true", help="reuse docs/data/budget_gain.json")
     args = parser.parse_args()
     jobs = [*base_jobs("paper"), *base_jobs("drain")]
-    results = {r["key"]: r["ttd"]["RTAW+"] for r in pt.evaluated(jobs, args.workers)}
+    results = stored([job["key"] for job in jobs]) if args.reuse else {}
+    if not results:
+        results = {r["key"]: r["ttd"]["RTAW+"] for r in pt.evaluated(jobs, args.workers)}
     print(HEADER)
     pooled: dict[str, list[float]] = {"base": [], "long": []}
     for mode in ("paper", "drain"):

@@ -175,3 +175,12 @@ def test_budget_gain_pairs_each_row_with_its_base(fake, monkeypatch, capsys):
     assert "RTAW+ vs its base, pooled: +2.0% [+2.0, +2.0]* (n=480)" in out
     saved = json.loads((pt.DATA / "budget_gain.json").read_text())
     assert len(saved["rows"]) == 24
+
+    def fail(jobs, workers):
+        raise AssertionError("--reuse evaluated again")
+        yield
+
+    monkeypatch.setattr(pt, "evaluated", fail)
+    monkeypatch.setattr("sys.argv", ["budget_gain.py", "--reuse"])
+    assert bg.main() == 0
+    assert "(n=480)" in capsys.readouterr().out
