@@ -12,7 +12,8 @@ import pytest
 from omegaconf import OmegaConf
 
 from rtaw_marl.config import as_plain, compose, to_typed
-from rtaw_marl.policies.pretrained.registry import PRETRAINED
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.policies.pretrained.registry import CONTINUED, PRETRAINED
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -58,8 +59,14 @@ def test_cluster_launchers_compose(app: str, launcher: str) -> None:
 
 
 def test_every_zoo_entry_is_its_registry_recipe() -> None:
-    """``+zoo=NAME`` composes exactly the overrides the registry lists for ``NAME``."""
+    """``+zoo=NAME`` composes exactly the overrides the registry lists for ``NAME``;
+    continued entries are no zoo option (they resume a copy of their base's folder)."""
+    for name in CONTINUED:
+        with pytest.raises(ConfigError, match=name):
+            compose("train", [f"+zoo={name}"])
     for name, overrides in PRETRAINED.items():
+        if name in CONTINUED:
+            continue
         assert as_plain(to_typed(compose("train", [f"+zoo={name}"]))) == as_plain(
             to_typed(compose("train", overrides))
         ), name

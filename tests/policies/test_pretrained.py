@@ -59,7 +59,8 @@ def test_continued_policies_extend_their_base_run(name: str) -> None:
     command = ckpt["command"]
     run_dir = next(c for c in command if c.startswith("output_dir=")).split("=", 1)[1]
     assert f"resume={run_dir}/checkpoints/last.pt" in command
-    assert f"frames={LONG_FRAMES}" in command and LONG_FRAMES == 3 * base["config"]["frames"]
+    assert f"frames={LONG_FRAMES}" in command
+    assert base["config"]["frames"] * 3 == LONG_FRAMES
     # The same run: its selection history starts with the base's, up to the base's best.
     assert ckpt["history"][: len(base["history"])] == base["history"]
     assert ckpt["history"][-1]["frames"] >= ckpt["frames"] >= base["frames"]
