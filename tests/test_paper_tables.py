@@ -157,7 +157,7 @@ def test_budget_gain_pairs_each_row_with_its_base(fake, monkeypatch, capsys):
     bg = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bg)
     seeds = list(range(20))
-    rules = fake_ttd(["MPDM", "RBTS", "lookahead", "hungarian", "hindsight", "RTAW+"], seeds)
+    rules = fake_ttd(list(MEANS), seeds)
     rows = {f"{label}, M={m}": rules for label, *_ in pt.ROWS for m in (10, 100)}
     pt.DATA.mkdir()
     for mode in ("paper", "drain"):
