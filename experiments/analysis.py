@@ -26,9 +26,9 @@ decision along its trajectory the script also asks MPDM (nearest task) and ``loo
 episodes give the TTD baseline. ``--policies`` takes registry entries
 (``C_astar_m10_plus``), used as is on every row, or the labels ``RTAW`` / ``RTAW+``,
 which mean each row's own pretrained entry (as in Table I: ``C_astar_m10`` and
-``C_astar_m10_long_plus`` on layout C, ``open60_direct_m10[_long_plus]`` on Direct). ``--checkpoint`` adds checkpoint files; given alone, it
-replaces the default policies. A policy that does not load is skipped with a warning.
-The page is written atomically.
+``C_astar_m10_long_plus`` on layout C, ``open60_direct_m10[_long_plus]`` on Direct).
+``--checkpoint`` adds checkpoint files; given alone, it replaces the default policies.
+A policy that does not load is skipped with a warning. The page is written atomically.
 """
 
 from __future__ import annotations
