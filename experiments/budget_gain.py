@@ -34,18 +34,6 @@ HEADER = (
 )
 
 
-def cell(base: list[float], ttd: list[float]) -> str:
-    """``+x.x% [lo, hi]`` of ``ttd`` against ``base`` (``*``: the interval excludes 0)."""
-    d = paired_difference(base, ttd)
-    return f"{d.pct:+.1f}% [{d.pct_low:+.1f}, {d.pct_high:+.1f}]{'*' if d.significant else ''}"
-
-
-def share(row: dict[str, list[float]], ttd: list[float]) -> float:
-    """Percent of the MPDM -> hindsight gain that ``ttd`` captures."""
-    mpdm, hindsight = sum(row["MPDM"]), sum(row["hindsight"])
-    return 100 * (mpdm - sum(ttd)) / (mpdm - hindsight)
-
-
 def base_jobs(mode: str) -> list[dict[str, Any]]:
     """Table I's jobs of ``mode``, evaluating only the base RTAW+ of each row."""
     jobs = []
@@ -90,14 +78,14 @@ def main() -> int:
             pooled["rtaw"] += row["RTAW"]
             gain = paired_difference(row["lookahead"], base).pct
             print(
-                f"| {key} | {mode} | {cell(base, long)} | {gain:+.1f}% -> "
-                f"{cell(row['lookahead'], long)} | {share(row, base):.0f}% -> "
-                f"{share(row, long):.0f}% | {cell(row['RTAW'], base)} |",
+                f"| {key} | {mode} | {pt.vs(base, long)} | {gain:+.1f}% -> "
+                f"{pt.vs(row['lookahead'], long)} | {pt.share({**row, BASE: base}, BASE)} -> "
+                f"{pt.share(row, 'RTAW+')} | {pt.vs(row['RTAW'], base)} |",
                 flush=True,
             )
     n = len(pooled["base"])
-    print(f"\nRTAW+ vs its base, pooled: {cell(pooled['base'], pooled['long'])} (n={n})")
-    print(f"base vs RTAW (both 409,600), pooled: {cell(pooled['rtaw'], pooled['base'])} (n={n})")
+    print(f"\nRTAW+ vs its base, pooled: {pt.vs(pooled['base'], pooled['long'])} (n={n})")
+    print(f"base vs RTAW (both 409,600), pooled: {pt.vs(pooled['rtaw'], pooled['base'])} (n={n})")
     payload = {"seeds": SEEDS, "label": BASE, "rows": results}
     text = json.dumps(payload, indent=1) + "\n"
     atomic_write(pt.DATA / "budget_gain.json", lambda fh: fh.write(text.encode()))

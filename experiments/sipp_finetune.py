@@ -26,8 +26,9 @@ import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from paper_tables import vs
+
 from rtaw_marl.evaluation import evaluate
-from rtaw_marl.evaluation.stats import paired_difference
 from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.sim.builder import SimSpec
@@ -68,12 +69,6 @@ def train(layout: str, frames: int) -> str:
     return f"{layout}: best selection TTD {best['eval']['ttd']:.1f} at {best['frames']} frames"
 
 
-def cell(base: list[float], ttd: list[float]) -> str:
-    """``+x.x% [lo, hi]`` of ``ttd`` against ``base`` (``*``: the interval excludes 0)."""
-    d = paired_difference(base, ttd)
-    return f"{d.pct:+.1f}% [{d.pct_low:+.1f}, {d.pct_high:+.1f}]{'*' if d.significant else ''}"
-
-
 def report() -> None:
     """Evaluate every fine-tuned policy on the SIPP and CBS rows; print and store."""
     table = json.loads((DATA / "navigators.json").read_text())
@@ -95,10 +90,10 @@ def report() -> None:
             for label in ("RTAW+", "MPDM", "RBTS", "lookahead"):
                 acc.setdefault(label, []).extend(row[label])
             acc.setdefault("tuned", []).extend(ttd)
-            cells = " | ".join(cell(row[b], ttd) for b in ("RTAW+", "MPDM", "RBTS", "lookahead"))
+            cells = " | ".join(vs(row[b], ttd) for b in ("RTAW+", "MPDM", "RBTS", "lookahead"))
             print(f"| {p}, {nav} | {cells} |", flush=True)
     for nav, acc in pooled.items():
-        cells = "; ".join(f"vs {b} {cell(acc[b], acc['tuned'])}"
+        cells = "; ".join(f"vs {b} {vs(acc[b], acc['tuned'])}"
                           for b in ("RTAW+", "MPDM", "RBTS", "lookahead"))  # fmt: skip
         print(f"- {nav}, pooled over A-E: fine-tuned {cells} (n={len(acc['tuned'])})")
     text = json.dumps({"seeds": SEEDS, "rows": out}, indent=1) + "\n"

@@ -4,11 +4,13 @@ navigation table's setting."""
 from __future__ import annotations
 
 import importlib.util
+import sys
 from pathlib import Path
 
 from rtaw_marl.config import compose, to_typed
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "experiments"))  # the script imports paper_tables, beside it
 _spec = importlib.util.spec_from_file_location(
     "sipp_finetune", ROOT / "experiments" / "sipp_finetune.py"
 )
