@@ -16,9 +16,11 @@ from rtaw_marl.errors import ConfigError, unknown_name
 __all__ = [
     "CONTINUED",
     "CURRICULUM",
+    "CURRICULUM_FRAMES",
     "LONG_FRAMES",
     "PRETRAINED",
     "SCENARIOS",
+    "curriculum_overrides",
     "pretrained_path",
     "train_command",
 ]
@@ -57,39 +59,50 @@ _RTAW_PLUS = ["model=rtaw_plus", *_BUDGET]
 
 #: Table II's RTAW+ policies with 500 robots: a curriculum over ``M`` that continues the
 #: best checkpoint of the 100-robot run (``runs/pretrained/<base>``, so train the base with
-#: ``train_pretrained.py`` first) with 500 robots and 2,500-task episodes, 163,840 more
-#: PPO frames (``frames=`` counts from the base's best checkpoint), selected on seeds
-#: 1000-1004. name -> (base entry, its best checkpoint's frames).
+#: ``train_pretrained.py`` first) with 500 robots and 2,500-task episodes,
+#: :data:`CURRICULUM_FRAMES` more PPO frames (``frames=`` counts from the base's best
+#: checkpoint), selected on seeds 1000-1004. name -> (base entry, its best checkpoint's
+#: frames).
 CURRICULUM: dict[str, tuple[str, int]] = {
     "open300_direct_m500_random_plus": ("open300_direct_m100_random_plus", 368_640),
     "C256_astar_m500_random_plus": ("C256_astar_m100_random_plus", 409_600),
 }
+CURRICULUM_FRAMES = 163_840
 
 
-def _curriculum(base: str, base_frames: int) -> list[str]:
+def curriculum_overrides(name: str, base_checkpoint: str, base_frames: int) -> list[str]:
+    """The overrides of :data:`CURRICULUM` entry ``name`` continuing ``base_checkpoint``
+    (a checkpoint of its base's scenario after ``base_frames`` PPO frames) with 500
+    robots for :data:`CURRICULUM_FRAMES` more frames. The registry's command continues
+    ``runs/pretrained/<base>/checkpoints/best.pt``; ``experiments/seed_spread.py`` passes
+    the best checkpoint of a base trained with another seed."""
+    base = CURRICULUM[name][0]
     scenario = [o for o in SCENARIOS[base.removesuffix("_plus")] if "num_robots" not in o]
     return [
         *scenario, "env.num_robots=500", "env.num_tasks=2500", "model=rtaw_plus", "algo=ppo",
-        f"frames={base_frames + 163_840}", "eval.every_frames=40960",
+        f"frames={base_frames + CURRICULUM_FRAMES}", "eval.every_frames=40960",
         "eval.seeds=[1000,1001,1002,1003,1004]", "seed=0",
-        f"resume=runs/pretrained/{base}/checkpoints/best.pt", "resume_new_scenario=true",
+        f"resume={base_checkpoint}", "resume_new_scenario=true",
     ]  # fmt: skip
 
 
-#: Table I's RTAW+ policies at three times the budget: the base run continued from its
-#: ``last.pt`` (409,600 PPO frames) to :data:`LONG_FRAMES` with the same recipe, in a copy
-#: of its folder ``runs/pretrained/<base>`` (so train the base first):
-#: ``resume=<run_dir>/checkpoints/last.pt``. name -> base entry.
+#: Table I's policies at three times the budget, both networks: the base run continued
+#: from its ``last.pt`` (409,600 PPO frames) to :data:`LONG_FRAMES` with the same recipe,
+#: in a copy of its folder ``runs/pretrained/<base>`` (so train the base first):
+#: ``resume=<run_dir>/checkpoints/last.pt``. name -> base entry: ``<scenario>_long`` is
+#: the paper's network, ``<scenario>_long_plus`` RTAW+.
 LONG_FRAMES = 1_228_800
 CONTINUED: dict[str, str] = {
-    f"{scenario}_long_plus": f"{scenario}_plus"
+    f"{scenario}_long{plus}": f"{scenario}{plus}"
     for m in (10, 100)
     for scenario in (f"open60_direct_m{m}", *(f"{p}_astar_m{m}" for p in "ABCDE"))
+    for plus in ("_plus",)
 }
 
 
 def _continued(base: str) -> list[str]:
-    budget = [o if not o.startswith("frames=") else f"frames={LONG_FRAMES}" for o in _RTAW_PLUS]
+    recipe = _RTAW_PLUS if base.endswith("_plus") else _RTAW
+    budget = [o if not o.startswith("frames=") else f"frames={LONG_FRAMES}" for o in recipe]
     return [*SCENARIOS[base.removesuffix("_plus")], *budget]
 
 
@@ -98,7 +111,10 @@ def _continued(base: str) -> list[str]:
 PRETRAINED: dict[str, list[str]] = {
     **{name: [*scenario, *_RTAW] for name, scenario in SCENARIOS.items()},
     **{f"{name}_plus": [*scenario, *_RTAW_PLUS] for name, scenario in SCENARIOS.items()},
-    **{name: _curriculum(*base) for name, base in CURRICULUM.items()},
+    **{
+        name: curriculum_overrides(name, f"runs/pretrained/{base}/checkpoints/best.pt", frames)
+        for name, (base, frames) in CURRICULUM.items()
+    },
     **{name: _continued(base) for name, base in CONTINUED.items()},
 }
 
