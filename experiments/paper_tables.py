@@ -327,7 +327,7 @@ def table1(mode: str, seeds: list[int], workers: int, hindsight: bool, reuse: bo
             env = {"num_robots": m, "num_tasks": 500, "queue_len": 10, "episode_mode": mode}
             jobs.append({"key": f"{label}, M={m}", "env": env, "layout": layout,
                          "navigator": nav, "tasks": "designated",
-                         "pretrained": {"RTAW": pretrained[m], "RTAW+": f"{pretrained[m]}_long"},
+                         "pretrained": f"{pretrained[m]}_long",
                          "seeds": seeds, "hindsight": hindsight})  # fmt: skip
     results = run_table(f"table1_{mode}", jobs, seeds, workers, reuse)
     return section(results, [job["key"] for job in jobs])

@@ -131,8 +131,8 @@ def test_a_missing_checkpoint_is_skipped_with_one_warning(monkeypatch, capsys):
     assert all(line.startswith("warning: RTAW") for line in err)
 
 
-def test_table1_pairs_the_long_rtaw_plus_with_the_paper_networks_base(fake, monkeypatch):
-    """Table I's RTAW+ column is each row's 1,228,800-frame policy; RTAW stays the base."""
+def test_table1_uses_both_networks_at_three_times_the_budget(fake, monkeypatch):
+    """Table I's RTAW and RTAW+ columns are each row's 1,228,800-frame policies."""
     loaded = set()
 
     def entry(scenario, label):
@@ -142,13 +142,14 @@ def test_table1_pairs_the_long_rtaw_plus_with_the_paper_networks_base(fake, monk
     monkeypatch.setattr(pt, "learned_entry", entry)
     assert pt.main(["table1", "--seeds", "2"]) == 0
     assert ("RTAW+", "C_astar_m100_long_plus") in loaded
-    assert ("RTAW", "C_astar_m100") in loaded
-    assert not any(name.endswith("_plus") and "_long" not in name for _, name in loaded)
+    assert ("RTAW", "C_astar_m100_long") in loaded
+    assert len(loaded) == 24
+    assert all("_long" in name for _, name in loaded)
 
 
-def test_budget_gain_pairs_each_row_with_its_base(fake, monkeypatch, capsys):
-    """experiments/budget_gain.py: the base RTAW+ of every row and mode, paired per seed
-    with Table I's stored columns."""
+def test_budget_gain_pairs_each_row_with_its_bases(fake, monkeypatch, capsys):
+    """experiments/budget_gain.py: both networks' bases on every row and mode, paired per
+    seed with Table I's stored columns."""
     monkeypatch.syspath_prepend(str(ROOT / "experiments"))
     monkeypatch.setitem(__import__("sys").modules, "paper_tables", pt)
     spec = importlib.util.spec_from_file_location(
@@ -162,19 +163,30 @@ def test_budget_gain_pairs_each_row_with_its_base(fake, monkeypatch, capsys):
     pt.DATA.mkdir()
     for mode in ("paper", "drain"):
         (pt.DATA / f"table1_{mode}.json").write_text(json.dumps({"seeds": seeds, "rows": rows}))
+    asked = []
 
-    def evaluated(jobs, workers):  # the base is 2% worse than the long policy, every seed
+    def evaluated(jobs, workers):  # RTAW+'s base 2% worse than Table I's, RTAW's 1% better
         for job in jobs:
-            yield {"key": job["key"], "ttd": {"RTAW+": [t / 0.98 for t in rules["RTAW+"]]}}
+            asked.append((job["policies"], job["pretrained"]))
+            plus = [t / 0.98 for t in rules["RTAW+"]]
+            yield {
+                "key": job["key"],
+                "ttd": {"RTAW+": plus, "RTAW": [t * 0.99 for t in rules["RTAW"]]},
+            }
 
     monkeypatch.setattr(pt, "evaluated", evaluated)
     monkeypatch.setattr("sys.argv", ["budget_gain.py"])
     assert bg.main() == 0
+    # The bases are the 409,600-frame entries, not Table I's "_long" ones.
+    assert (("RTAW", "RTAW+"), "C_astar_m100") in asked
+    assert len(asked) == 24
     out = capsys.readouterr().out
     assert out.count("| A* layout C, M=100 |") == 2  # paper and drain
-    assert "RTAW+ vs its base, pooled: +2.0% [+2.0, +2.0]* (n=480)" in out
+    assert "- RTAW+ 3x vs 1x: +2.0% [+2.0, +2.0]* (n=480)" in out
+    assert "- RTAW 3x vs 1x: -1.0% [-1.0, -1.0]* (n=480)" in out
     saved = json.loads((pt.DATA / "budget_gain.json").read_text())
     assert len(saved["rows"]) == 24
+    assert set(saved["rows"]["drain|A* layout C, M=100"]) == {"RTAW", "RTAW+"}
 
     def fail(jobs, workers):
         raise AssertionError("--reuse evaluated again")
