@@ -45,12 +45,16 @@ class RTAWPlusConfig:
         embed_dim: Token size ``E`` of tasks and rivals.
         heads: Attention heads (must divide ``embed_dim``).
         critic_hidden: Hidden size of the critic's value head.
+        critic_fleet: The critic (used only in training) also sees the whole fleet: the
+            robots' features, embedded and mean-pooled. ``False`` keeps the critic to
+            the acting robot's relational view, as the actor (an ablation).
     """
 
     name: str = "rtaw_plus"
     embed_dim: int = 32
     heads: int = 4
     critic_hidden: int = 64
+    critic_fleet: bool = True
 
     def __post_init__(self) -> None:
         from rtaw_marl.errors import ConfigError
@@ -58,6 +62,10 @@ class RTAWPlusConfig:
         if self.name != "rtaw_plus":
             raise ConfigError(f"model.name must be 'rtaw_plus' for these keys, got {self.name!r}")
         _check_sizes(self, ("embed_dim", "heads", "critic_hidden"))
+        if not isinstance(self.critic_fleet, bool):
+            raise ConfigError(
+                f"model.critic_fleet must be true or false, got {self.critic_fleet!r}"
+            )
         for width in (self.embed_dim, RIVAL_DIM):
             if width % self.heads:
                 raise ConfigError(

@@ -187,24 +187,28 @@ class RTAWPlusCritic(nn.Module):
         embed_dim: ``E``.
         heads: Attention heads.
         hidden_dim: Hidden size of the value head.
+        fleet: Also see the whole fleet (``robots``); ``False``: the tasks' relational
+            view only, and ``in_keys`` drops ``robots``.
     """
 
-    in_keys = ("relations", "robots", "action_mask")
+    in_keys: tuple[str, ...] = ("relations", "robots", "action_mask")
 
-    def __init__(self, embed_dim: int, heads: int, hidden_dim: int) -> None:
+    def __init__(self, embed_dim: int, heads: int, hidden_dim: int, fleet: bool = True) -> None:
         super().__init__()
         self.encoder = RTAWPlusEncoder(embed_dim, heads, rivals=False)
-        self.fleet_embed = _mlp(len(ROBOT_FEATURES), embed_dim, embed_dim)
-        self.head = nn.Sequential(
-            nn.Linear(2 * embed_dim, hidden_dim), nn.Tanh(), nn.Linear(hidden_dim, 1)
-        )
+        self.fleet_embed = _mlp(len(ROBOT_FEATURES), embed_dim, embed_dim) if fleet else None
+        if not fleet:
+            self.in_keys = ("relations", "action_mask")
+        width = (2 if fleet else 1) * embed_dim
+        self.head = nn.Sequential(nn.Linear(width, hidden_dim), nn.Tanh(), nn.Linear(hidden_dim, 1))
 
-    def forward(
-        self, relations: torch.Tensor, robots: torch.Tensor, action_mask: torch.Tensor
-    ) -> torch.Tensor:
-        """Value ``[*, 1]``; ``robots`` is ``[*, M, 3]``."""
+    def forward(self, relations: torch.Tensor, *rest: torch.Tensor) -> torch.Tensor:
+        """Value ``[*, 1]`` from ``relations``, ``robots`` ``[*, M, 3]`` (with the fleet)
+        and ``action_mask``, in ``in_keys`` order."""
+        *robots, action_mask = rest
         tasks = self.encoder(relations, None, action_mask)
         weight = action_mask.unsqueeze(-1).to(tasks.dtype)
-        task_mean = (tasks * weight).sum(-2) / weight.sum(-2).clamp_min(1.0)
-        fleet = self.fleet_embed(robots).mean(-2)
-        return self.head(torch.cat([task_mean, fleet], dim=-1))
+        parts = [(tasks * weight).sum(-2) / weight.sum(-2).clamp_min(1.0)]
+        if self.fleet_embed is not None:
+            parts.append(self.fleet_embed(robots[0]).mean(-2))
+        return self.head(torch.cat(parts, dim=-1))

@@ -124,3 +124,23 @@ def test_torchrl_wrappers_sample_valid_slots() -> None:
 def test_bad_config_is_an_error(keys: dict, match: str) -> None:
     with pytest.raises(ConfigError, match=match):
         RTAWPlusConfig(**keys)
+
+
+def test_critic_without_the_fleet_does_not_read_the_robots() -> None:
+    """``critic_fleet=false`` (the ablation): the value depends on the tasks' relational
+    view only; the actor is the same network."""
+    torch.manual_seed(6)
+    actor, critic = build_networks(RTAWPlusConfig(critic_fleet=False))
+    assert critic.in_keys == ("relations", "action_mask")
+    assert actor.in_keys == build_networks(RTAWPlusConfig())[0].in_keys
+    td = _state(4, 9, 6, seed=7)
+    other = td.clone()
+    other["robots"] = torch.rand(4, 30, 3)  # another fleet, another size
+    value = critic(*(td[k] for k in critic.in_keys))
+    torch.testing.assert_close(value, critic(*(other[k] for k in critic.in_keys)))
+    assert make_critic(critic)(td.clone())["state_value"].shape == (4, 1)
+    # The full critic does read them.
+    full = build_networks(RTAWPlusConfig())[1]
+    assert not torch.allclose(
+        full(*(td[k] for k in full.in_keys)), full(*(other[k] for k in full.in_keys))
+    )

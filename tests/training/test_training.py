@@ -114,6 +114,19 @@ def test_interop_route_trains_rtaw_plus(train_cfg, tmp_path: Path) -> None:
     assert all(torch.isfinite(v).all() for v in ckpt["model"]["actor"].values())
 
 
+@pytest.mark.parametrize("interop", [False, True])
+def test_rtaw_plus_trains_with_a_critic_blind_to_the_fleet(train_cfg, tmp_path, interop) -> None:
+    """The ``model.critic_fleet=false`` ablation trains on both routes and its checkpoint
+    rebuilds the same critic."""
+    overrides = ["scenario=poc", "frames=512", "eval.every_frames=512", f"interop={interop}",
+                 "model=rtaw_plus", "model.critic_fleet=false"]  # fmt: skip
+    result = train(train_cfg(overrides), tmp_path)
+    ckpt = load_checkpoint(result.last_checkpoint)
+    assert ckpt["model_config"]["critic_fleet"] is False
+    assert not any(k.startswith("fleet_embed") for k in ckpt["model"]["critic"])
+    assert all(torch.isfinite(v).all() for v in ckpt["model"]["critic"].values())
+
+
 def test_interop_route_trains_through_pettingzoo_wrapper(train_cfg, tmp_path: Path) -> None:
     """A few PPO updates through torchrl's PettingZooWrapper with loss_mask_key."""
     result = train(
