@@ -170,13 +170,19 @@ def _first_line(exc: BaseException) -> str:
     return lines[1] if len(lines) > 1 and lines[0].endswith(":") else (lines or [""])[0]
 
 
-def plain_model(model: ModelConfig) -> dict[str, Any]:
-    """A model option as a checkpoint's ``model_config``.
+def plain_model(model: ModelConfig | Mapping[str, Any]) -> dict[str, Any]:
+    """A model option (or a checkpoint's ``model_config``) as a checkpoint's
+    ``model_config``, every key filled in.
 
     ``rtaw`` configs store their sizes only (as since the first release, so that old
-    checkpoints compare equal on resume); every other model stores its ``name`` too.
+    checkpoints compare equal on resume); every other model stores its ``name`` too. A
+    mapping gets the defaults of keys added since it was written, so a checkpoint from
+    before a new model key compares equal to a config with that key's default.
+
+    Raises:
+        ConfigError: A mapping with an unknown model or key.
     """
-    out = dataclasses.asdict(model)
+    out = dataclasses.asdict(_typed_model(model))
     if out.get("name") == "rtaw":
         out.pop("name")
     return out

@@ -112,7 +112,7 @@ def resume(
     path = Path(cfg.resume)
     ckpt = load_checkpoint(path)
     model_cfg = plain_model(cfg.model)
-    if ckpt["model_config"] != model_cfg:
+    if plain_model(ckpt["model_config"]) != model_cfg:
         raise ConfigError(
             f"resume: checkpoint model {ckpt['model_config']} differs from model {model_cfg}"
         )

@@ -14,7 +14,7 @@ import pytest
 import rtaw_marl.training.checkpoints as checkpoints_module
 import rtaw_marl.training.ppo as ppo
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.models.checkpoint import load_checkpoint
+from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.training.checkpoints import trim_csv_logs
 from rtaw_marl.training.ppo import train
 
@@ -173,3 +173,20 @@ def test_ctrl_c_with_two_workers_is_one_line_and_130(tmp_path: Path) -> None:
     assert lines[0].startswith("interrupted: ")
     assert f"continue with resume={last}" in lines[0]
     assert load_checkpoint(last)["frames"] >= 512
+
+
+def test_resume_from_a_checkpoint_older_than_a_model_key(train_cfg, tmp_path: Path) -> None:
+    """A run saved before ``model.critic_fleet`` existed (its ``model_config`` lacks the
+    key) resumes under the key's default, and is refused under another value."""
+    first = train(train_cfg([*TINY, "model=rtaw_plus", "frames=512"]), tmp_path / "a")
+    ckpt = load_checkpoint(first.last_checkpoint)
+    del ckpt["model_config"]["critic_fleet"]
+    old = save_checkpoint(tmp_path / "old.pt", ckpt)
+    resumed = train(
+        train_cfg([*TINY, "model=rtaw_plus", "frames=1024", f"resume={old}"]), tmp_path / "b"
+    )
+    assert resumed.frames == 1024
+    other = train_cfg([*TINY, "model=rtaw_plus", "model.critic_fleet=false", "frames=1024",
+                       f"resume={old}"])  # fmt: skip
+    with pytest.raises(ConfigError, match="differs from model"):
+        train(other, tmp_path / "c")
