@@ -25,8 +25,8 @@ decision along its trajectory the script also asks MPDM (nearest task) and ``loo
 ``lookahead``'s own trajectory gets the same statistics, for reference, and MPDM's own
 episodes give the TTD baseline. ``--policies`` takes registry entries
 (``C_astar_m10_plus``), used as is on every row, or the labels ``RTAW`` / ``RTAW+``,
-which mean each row's own pretrained entry (as in Table I: ``C_astar_m10`` and
-``C_astar_m10_long_plus`` on layout C, ``open60_direct_m10[_long_plus]`` on Direct).
+which mean each row's own pretrained entry (as in Table I: ``C_astar_m10_long`` and
+``C_astar_m10_long_plus`` on layout C, ``open60_direct_m10_long[_plus]`` on Direct).
 ``--checkpoint`` adds checkpoint files; given alone, it replaces the default policies.
 A policy that does not load is skipped with a warning. The page is written atomically.
 """
@@ -58,7 +58,7 @@ DEFAULT_OUT = ROOT / "docs" / "analysis.md"
 #: Table I's simulator settings (drain mode).
 ENV = {"num_robots": 10, "num_tasks": 500, "queue_len": 10, "episode_mode": "drain"}
 #: Learned label -> suffix of the row's pretrained registry entry.
-LEARNED = {"RTAW": "", "RTAW+": "_long_plus"}
+LEARNED = {"RTAW": "_long", "RTAW+": "_long_plus"}
 DEFAULT_POLICIES = "RTAW+,RTAW"
 LOOKAHEAD = "lookahead"
 #: Relative tolerance of a tie, as the rules use it (``baselines._TIE_RTOL``).

@@ -332,11 +332,34 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
         overrides=["experiment=table1", "row=D", f"hydra/launcher={launcher}"],
         return_hydra_config=True,
     )
-    assert cfg.hydra.sweeper.params == {"row": "direct,A,B,C,D,E", "env.num_robots": "10,100"}
+    rows = "direct,A,B,C,D,E,direct_m100,A_m100,B_m100,C_m100,D_m100,E_m100"
+    assert cfg.hydra.sweeper.params == {"row": rows}
     assert (cfg.layout.preset, cfg.navigator.name) == ("D", "astar")
-    assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10"]
+    assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10_long"]
     assert cfg.env.episode_mode == "paper"
     assert list(cfg.policy) == ["mpdm", "rbts", "rtaw"]
+
+
+def test_row_configs_select_the_policies_of_table_one() -> None:
+    """row=X (10 robots) and row=X_m100 (100 robots) run the setting and the shipped
+    policies (RTAW+, then the paper's network) that experiments/paper_tables.py puts in
+    that Table I row."""
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[2] / "experiments" / "paper_tables.py"
+    spec = importlib.util.spec_from_file_location("paper_tables", path)
+    pt = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(pt)
+    names = {"Direct (open 60x60)": "direct", **{f"A* layout {p}": p for p in "ABCDE"}}
+    for label, layout, navigator, pretrained in pt.ROWS:
+        for m in (10, 100):
+            row = names[label] + ("_m100" if m == 100 else "")
+            cfg = compose(config_name="eval", overrides=[f"row={row}"])
+            assert cfg.env.num_robots == m
+            assert cfg.navigator.name == navigator
+            assert cfg.layout.get("preset", cfg.layout.name) == layout.get("preset", layout["name"])
+            entry = f"{pretrained[m]}_long"
+            assert list(cfg.pretrained) == [entry + pt.LEARNED["RTAW+"], entry + pt.LEARNED["RTAW"]]
 
 
 RULES = "policy=[mpdm,rbts,lookahead,hungarian,hindsight]"

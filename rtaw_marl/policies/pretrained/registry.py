@@ -96,7 +96,7 @@ CONTINUED: dict[str, str] = {
     f"{scenario}_long{plus}": f"{scenario}{plus}"
     for m in (10, 100)
     for scenario in (f"open60_direct_m{m}", *(f"{p}_astar_m{m}" for p in "ABCDE"))
-    for plus in ("_plus",)
+    for plus in ("", "_plus")
 }
 
 
