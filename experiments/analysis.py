@@ -451,7 +451,7 @@ def target_clause(name: str, pairs: list[Pair]) -> str:
     nums = "; ".join(f"{s.short}: uncontested {pct(s.chosen_free)} vs {pct(la.chosen_free)}, "
                      f"shorter chain {pct(s.shorter_chain)} vs {pct(la.shorter_chain)}"
                      for s, la in pairs)  # fmt: skip
-    return f"The task `{name}` takes instead is {free} and {chain} than lookahead's ({nums})"
+    return f"The task `{name}` takes instead, against lookahead's: {free}; {chain} ({nums})"
 
 
 def agree_clause(name: str, pairs: list[Pair]) -> str:
