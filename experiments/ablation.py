@@ -113,7 +113,7 @@ def main() -> int:
     ablated = ss.evaluate_runs(
         args.name, dict(zip(args.train_seeds, paths, strict=True)), stored["seeds"]
     )
-    ttd = {k: v for k, v in stored["ttd"].items()}
+    ttd = dict(stored["ttd"])
     ttd.update({f"ablated {label}": v for label, v in ablated.items() if label.startswith("seed")})
     print(ss.report(ttd))
     runs = [np.asarray(v) for k, v in ttd.items() if k.startswith("seed")]

@@ -2,18 +2,12 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
+from experiment_scripts import load_experiment
 
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.policies.pretrained.registry import PRETRAINED
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "experiments"))  # the script imports seed_spread, beside it
-_spec = importlib.util.spec_from_file_location("ablation", ROOT / "experiments" / "ablation.py")
-ab = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ab)
+ab = load_experiment("ablation")
 
 
 def test_the_ablated_command_is_the_entrys_plus_the_overrides(tmp_path):

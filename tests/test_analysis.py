@@ -2,22 +2,15 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+from experiment_scripts import load_experiment
 
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.lookahead import _end_distances
 from rtaw_marl.sim.builder import SimSpec
 
-ROOT = Path(__file__).resolve().parents[1]
-_spec = importlib.util.spec_from_file_location("analysis", ROOT / "experiments" / "analysis.py")
-an = importlib.util.module_from_spec(_spec)
-sys.modules.setdefault("analysis", an)  # dataclasses look their module up
-_spec.loader.exec_module(an)
+an = load_experiment("analysis", register=True)  # dataclasses look their module up
 
 ROW = an.Row("tiny", "tiny", {"name": "open", "width": 60, "height": 60}, "astar", "-")
 

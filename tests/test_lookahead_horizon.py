@@ -3,17 +3,9 @@ its H = 0 is MPDM itself."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
+from experiment_scripts import load_experiment
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "experiments"))  # the script imports paper_tables, beside it
-_spec = importlib.util.spec_from_file_location(
-    "lookahead_horizon", ROOT / "experiments" / "lookahead_horizon.py"
-)
-lh = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(lh)
+lh = load_experiment("lookahead_horizon")
 
 
 def test_the_sweep_never_touches_the_evaluation_seeds():

@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-from pathlib import Path
+import sys
 
 import numpy as np
 import pytest
+from experiment_scripts import load_experiment
 
 from rtaw_marl.errors import ConfigError
 
-ROOT = Path(__file__).resolve().parents[1]
-_spec = importlib.util.spec_from_file_location(
-    "paper_tables", ROOT / "experiments" / "paper_tables.py"
-)
-pt = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(pt)
+pt = load_experiment("paper_tables")
 
 #: Mean TTD per policy of the fake evaluations (lower is better).
 MEANS = {"MPDM": 1000, "RBTS": 990, "lookahead": 920, "hungarian": 1010, "hindsight": 850,
@@ -150,13 +145,8 @@ def test_table1_uses_both_networks_at_three_times_the_budget(fake, monkeypatch):
 def test_budget_gain_pairs_each_row_with_its_bases(fake, monkeypatch, capsys):
     """experiments/budget_gain.py: both networks' bases on every row and mode, paired per
     seed with Table I's stored columns."""
-    monkeypatch.syspath_prepend(str(ROOT / "experiments"))
-    monkeypatch.setitem(__import__("sys").modules, "paper_tables", pt)
-    spec = importlib.util.spec_from_file_location(
-        "budget_gain", ROOT / "experiments" / "budget_gain.py"
-    )
-    bg = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bg)
+    monkeypatch.setitem(sys.modules, "paper_tables", pt)  # budget_gain's, with the fakes
+    bg = load_experiment("budget_gain")
     seeds = list(range(20))
     rules = fake_ttd(list(MEANS), seeds)
     rows = {f"{label}, M={m}": rules for label, *_ in pt.ROWS for m in (10, 100)}

@@ -3,22 +3,13 @@ its 500-robot curriculum continuing the 100-robot base trained with the same see
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
+from experiment_scripts import load_experiment
 
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.policies.pretrained.registry import PRETRAINED
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "experiments"))  # the script imports paper_tables, beside it
-_spec = importlib.util.spec_from_file_location(
-    "seed_spread", ROOT / "experiments" / "seed_spread.py"
-)
-ss = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ss)
+ss = load_experiment("seed_spread")
 
 
 def test_a_curriculum_seed_continues_the_base_of_the_same_seed(monkeypatch, tmp_path):

@@ -3,19 +3,11 @@ navigation table's setting."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
+from experiment_scripts import load_experiment
 
 from rtaw_marl.config import compose, to_typed
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "experiments"))  # the script imports paper_tables, beside it
-_spec = importlib.util.spec_from_file_location(
-    "sipp_finetune", ROOT / "experiments" / "sipp_finetune.py"
-)
-sf = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(sf)
+sf = load_experiment("sipp_finetune")
 
 
 def test_command_continues_the_astar_policy_with_sipp_on_the_table_setting(monkeypatch):

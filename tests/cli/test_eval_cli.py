@@ -344,12 +344,9 @@ def test_row_configs_select_the_policies_of_table_one() -> None:
     """row=X (10 robots) and row=X_m100 (100 robots) run the setting and the shipped
     policies (RTAW+, then the paper's network) that experiments/paper_tables.py puts in
     that Table I row."""
-    import importlib.util
+    from experiment_scripts import load_experiment
 
-    path = Path(__file__).resolve().parents[2] / "experiments" / "paper_tables.py"
-    spec = importlib.util.spec_from_file_location("paper_tables", path)
-    pt = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(pt)
+    pt = load_experiment("paper_tables")
     names = {"Direct (open 60x60)": "direct", **{f"A* layout {p}": p for p in "ABCDE"}}
     for label, layout, navigator, pretrained in pt.ROWS:
         for m in (10, 100):
