@@ -18,6 +18,8 @@ LAYERS = {
     "rtaw_marl.errors": 0,
     "rtaw_marl.utils": 0,
     "rtaw_marl.sim": 1,
+    # Named settings over the simulator's options: below every adapter.
+    "rtaw_marl.scenarios": 1.5,
     "rtaw_marl.envs": 2,
     "rtaw_marl.warehouse_v0": 2,
     "rtaw_marl.warehouse_v1": 2,

@@ -57,17 +57,23 @@ class SimSpec:
         tasks: str | Mapping[str, Any] | TaskOption | None = None,
     ) -> SimSpec:
         """A spec from names, ``{"name": ..., **keys}`` mappings or typed options; a
-        group left ``None`` takes its default.
+        group left ``None`` takes its default. Simulator keys not in ``env`` (a mapping)
+        take the navigator's ``env_defaults`` (SIPP and CBS turn the completion noise
+        off), as ``navigator=sipp`` does on the command line.
 
         Raises:
             ConfigError: A name or key is unknown (listing the valid ones), or a value is
                 invalid.
         """
         spec = cls()
+        nav = spec.navigator if navigator is None else navigator_option(navigator)
+        if not isinstance(env, SimConfig):
+            # What the navigator's YAML twin sets (SIPP/CBS: no noise), unless given.
+            env = {**nav.env_defaults, **(env or {})}
         return cls(
-            env=spec.env if env is None else sim_config(env),
+            env=sim_config(env),
             layout=spec.layout if layout is None else layout_option(layout),
-            navigator=spec.navigator if navigator is None else navigator_option(navigator),
+            navigator=nav,
             tasks=spec.tasks if tasks is None else task_option(tasks),
         )
 

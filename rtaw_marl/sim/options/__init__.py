@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rtaw_marl.errors import unknown_name
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.options.base import Option, option_from
 from rtaw_marl.sim.options.layouts import (
@@ -50,6 +51,7 @@ from rtaw_marl.sim.options.tasks import (
     TwoTaskConfig,
 )
 from rtaw_marl.sim.tasks import TaskStream
+from rtaw_marl.sim.warehouse_layouts import PRESETS
 
 __all__ = [
     "LAYOUTS",
@@ -86,11 +88,24 @@ __all__ = [
 
 def layout_option(spec: str | Mapping[str, Any] | LayoutOption | Layout) -> LayoutOption:
     """A layout option from a name (``shelves``), a file path, a mapping, a
-    :class:`Layout` or itself."""
+    :class:`Layout` or itself.
+
+    The paper's warehouses are named as on the command line (``layout=C``): ``"C"`` and
+    ``{"name": "C", "width": 256, "height": 256}`` are the ``preset`` option with
+    ``preset="C"``.
+    """
     if isinstance(spec, Layout):
         return GivenLayout(layout=spec)
     if isinstance(spec, str) and spec not in LAYOUTS and "." in spec:
         return FileLayoutConfig(path=spec)
+    name = spec if isinstance(spec, str) else None
+    if isinstance(spec, Mapping):
+        name = spec.get("name")
+    if name in PRESETS:
+        keys = {} if isinstance(spec, str) else {k: v for k, v in spec.items() if k != "name"}
+        return option_from(LAYOUTS, "layout", {"name": "preset", "preset": name, **keys})  # type: ignore[return-value]
+    if isinstance(name, str) and name not in LAYOUTS:
+        raise unknown_name("layout", name, [*LAYOUTS, *PRESETS])
     return option_from(LAYOUTS, "layout", spec)  # type: ignore[return-value]
 
 

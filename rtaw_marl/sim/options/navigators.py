@@ -3,7 +3,9 @@ observe, and the executor that moves the robots."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import ClassVar
 
 from rtaw_marl.errors import ConfigError
@@ -22,6 +24,8 @@ __all__ = [
     "SIPPConfig",
 ]
 
+_NO_NOISE: Mapping[str, float] = MappingProxyType({"noise_mean": 0.0, "noise_var": 0.0})
+
 
 @dataclass(kw_only=True)
 class NavigatorOption(Option):
@@ -31,6 +35,9 @@ class NavigatorOption(Option):
     group: ClassVar[str] = "navigator"
     #: Whether robots occupy cells and wait for each other.
     collision_aware: ClassVar[bool] = False
+    #: Simulator keys this option changes unless they are given (its YAML twin's ``env``
+    #: block): ``SimSpec.of(navigator="sipp")`` and ``navigator=sipp`` build the same.
+    env_defaults: ClassVar[Mapping[str, float]] = MappingProxyType({})
 
     def navigator(self, layout: Layout) -> Navigator:
         """The distance model on ``layout`` (shared by every simulator of a batch)."""
@@ -69,6 +76,8 @@ class SIPPConfig(NavigatorOption):
 
     name: str = "sipp"
     collision_aware: ClassVar[bool] = True
+    # Tasks are timed by their executed paths in whole seconds: no completion noise.
+    env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     time_limit: float = 10.0
 
     def __post_init__(self) -> None:
@@ -93,6 +102,8 @@ class CBSConfig(NavigatorOption):
 
     name: str = "cbs"
     collision_aware: ClassVar[bool] = True
+    # Tasks are timed by their executed paths in whole seconds: no completion noise.
+    env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     time_limit: float = 10.0
     max_nodes: int = 200
 

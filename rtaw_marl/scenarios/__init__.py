@@ -1,0 +1,31 @@
+"""Named scenarios: one place that defines each setting the project trains and reports on.
+
+A :class:`Scenario` is a simulator spec (the ``env``, ``layout``, ``navigator`` and
+``tasks`` groups, as names and mappings) plus its evaluation settings: the evaluation
+seeds and the shipped learned policies that belong to it. The same name works everywhere:
+
+* Python: ``SCENARIOS["C_astar_m10"].spec()``, ``scenario("C_astar_m10")``,
+  ``warehouse_v1.env(scenario="C_astar_m10")``;
+* the command line: ``rtaw-eval scenario=C_astar_m10`` and ``rtaw-train
+  scenario=C_astar_m10`` (``conf/scenario/<name>.yaml``, generated from this registry), and
+  ``rtaw-eval row=C`` (a Table I row: the scenario and its shipped policies,
+  ``conf/row/<row>.yaml``, generated as well);
+* the studies of :mod:`rtaw_marl.evaluation.studies`, which produce docs/results.md.
+
+``tests/scenarios/test_scenarios.py`` fails when a generated YAML file drifts from this
+registry, and checks that Hydra and Python build the same simulator for every name.
+This package is plain Python over :mod:`rtaw_marl.sim` (no torch, no Hydra).
+"""
+
+from __future__ import annotations
+
+from rtaw_marl.scenarios.registry import (
+    EVAL_SEEDS,
+    ROWS,
+    SCENARIOS,
+    TABLE1_ROBOTS,
+    Scenario,
+    scenario,
+)
+
+__all__ = ["EVAL_SEEDS", "ROWS", "SCENARIOS", "TABLE1_ROBOTS", "Scenario", "scenario"]

@@ -1,0 +1,87 @@
+"""One source per setting: the scenario registry, its generated YAML twins, and the
+same simulator from every way of naming it."""
+
+from __future__ import annotations
+
+import pytest
+
+from rtaw_marl.config import CONF_DIR, compose, to_typed
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.policies.pretrained.registry import PRETRAINED
+from rtaw_marl.scenarios import EVAL_SEEDS, ROWS, SCENARIOS, scenario
+from rtaw_marl.scenarios.configs import expected_files
+from rtaw_marl.sim.builder import SimSpec
+
+
+def test_generated_configs_match_the_registry() -> None:
+    """conf/scenario and conf/row hold exactly the registry's files, as generated."""
+    files = expected_files()
+    on_disk = {*(CONF_DIR / "scenario").glob("*.yaml"), *(CONF_DIR / "row").glob("*.yaml")}
+    assert on_disk == set(files), "run: python -m rtaw_marl.scenarios.configs"
+    stale = [p.name for p, text in files.items() if p.read_text() != text]
+    assert not stale, f"stale (run python -m rtaw_marl.scenarios.configs): {stale}"
+
+
+@pytest.mark.parametrize("name", list(SCENARIOS))
+@pytest.mark.parametrize("app", ["eval", "train"])
+def test_command_line_and_python_build_the_same_scenario(name: str, app: str) -> None:
+    spec = to_typed(compose(config_name=app, overrides=[f"scenario={name}"])).sim_spec()
+    assert spec == SCENARIOS[name].spec()
+    # The override list names the same setting.
+    assert (
+        to_typed(compose(config_name=app, overrides=SCENARIOS[name].overrides())).sim_spec() == spec
+    )
+
+
+@pytest.mark.parametrize("row", list(ROWS))
+def test_a_row_is_its_scenario_and_its_shipped_policies(row: str) -> None:
+    cfg = compose(config_name="eval", overrides=[f"row={row}"])
+    s = SCENARIOS[ROWS[row]]
+    assert to_typed(cfg).sim_spec() == s.spec()
+    assert list(cfg.pretrained) == list(s.policies.values())
+
+
+def test_every_shipped_policy_a_scenario_names_is_registered() -> None:
+    named = {p for s in SCENARIOS.values() for p in s.policies.values()}
+    assert named <= set(PRETRAINED), sorted(named - set(PRETRAINED))
+
+
+def test_evaluation_seeds_are_not_selection_seeds() -> None:
+    assert EVAL_SEEDS == tuple(range(20))
+    assert all(max(s.seeds) < 1000 for s in SCENARIOS.values())
+
+
+@pytest.mark.parametrize("option", sorted(p.stem for p in (CONF_DIR / "layout").glob("*.yaml")))
+def test_layout_names_mean_the_same_in_python(option: str) -> None:
+    """``layout=C`` and ``SimSpec.of(layout="C")`` are the same layout (``file`` needs a path)."""
+    overrides = [f"layout={option}"] + (["layout.path=maps/x.map"] if option == "file" else [])
+    hydra = to_typed(compose(config_name="eval", overrides=overrides)).sim_spec().layout
+    python = SimSpec.of(layout="maps/x.map" if option == "file" else option).layout
+    assert python == hydra
+
+
+@pytest.mark.parametrize("option", sorted(p.stem for p in (CONF_DIR / "navigator").glob("*.yaml")))
+def test_navigator_names_mean_the_same_in_python(option: str) -> None:
+    """``navigator=sipp`` turns the noise off on the command line and in Python alike."""
+    hydra = to_typed(compose(config_name="eval", overrides=[f"navigator={option}"])).sim_spec()
+    assert SimSpec.of(navigator=option) == hydra
+    # A key given explicitly wins over the navigator's defaults, as on the command line.
+    given = to_typed(
+        compose(config_name="eval", overrides=[f"navigator={option}", "env.noise_mean=0.5"])
+    ).sim_spec()
+    assert SimSpec.of({"noise_mean": 0.5}, navigator=option) == given
+
+
+def test_unknown_names_list_the_valid_ones() -> None:
+    with pytest.raises(ConfigError, match="unknown scenario 'C_astar'.*C_astar_m10"):
+        scenario("C_astar")
+    with pytest.raises(ConfigError, match="unknown layout 'Z'.*A, B, C, D, E"):
+        SimSpec.of(layout="Z")
+
+
+def test_with_env_changes_only_what_it_is_given() -> None:
+    base = SCENARIOS["C_astar_m10"]
+    paper = base.with_env(episode_mode="paper")
+    assert paper.spec().env.episode_mode == "paper"
+    assert paper.spec().env.num_robots == 10
+    assert base.spec().env.episode_mode == "drain"
