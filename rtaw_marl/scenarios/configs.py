@@ -45,7 +45,8 @@ def row_yaml(row: str) -> str:
         "\n".join(
             [
                 "# @package _global_",
-                f"# Table I row {s.title!r}: scenario {s.name} and its shipped policies ({labels}).",
+                f"# Table I row {s.title!r}: scenario {s.name} and its shipped policies "
+                f"({labels}).",
                 _GENERATED,
                 "defaults:",
                 f"  - override /scenario: {s.name}",

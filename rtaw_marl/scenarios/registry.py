@@ -184,7 +184,7 @@ def _appendix() -> list[Scenario]:
                 "robot_starts": [[2, 2], [6, 2]],
                 "robot_free_times": [0.0, 2.0],
             },
-        ),  # fmt: skip
+        ),
         _scenario(
             "two_task",
             "two tasks",

@@ -47,7 +47,7 @@ def test_every_shipped_policy_a_scenario_names_is_registered() -> None:
 
 
 def test_evaluation_seeds_are_not_selection_seeds() -> None:
-    assert EVAL_SEEDS == tuple(range(20))
+    assert tuple(range(20)) == EVAL_SEEDS
     assert all(max(s.seeds) < 1000 for s in SCENARIOS.values())
 
 
@@ -73,9 +73,9 @@ def test_navigator_names_mean_the_same_in_python(option: str) -> None:
 
 
 def test_unknown_names_list_the_valid_ones() -> None:
-    with pytest.raises(ConfigError, match="unknown scenario 'C_astar'.*C_astar_m10"):
+    with pytest.raises(ConfigError, match=r"unknown scenario 'C_astar'.*C_astar_m10"):
         scenario("C_astar")
-    with pytest.raises(ConfigError, match="unknown layout 'Z'.*A, B, C, D, E"):
+    with pytest.raises(ConfigError, match=r"unknown layout 'Z'.*A, B, C, D, E"):
         SimSpec.of(layout="Z")
 
 
