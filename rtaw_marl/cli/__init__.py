@@ -9,7 +9,8 @@ What each command needs:
 
 * ``rtaw-eval`` and ``rtaw-render``: the ``cli`` extra (Hydra, tqdm, matplotlib); the
   trained policies (``policy=rtaw``, ``policy=checkpoint``) also need the ``train`` extra.
-* ``rtaw-train``: the ``train`` extra (the ``cli`` extra plus torch, tensordict, torchrl).
+* ``rtaw-train`` and ``rtaw-study``: the ``train`` extra (the ``cli`` extra plus torch,
+  tensordict, torchrl).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import importlib
 import importlib.util
 import sys
 
-__all__ = ["EXTRAS", "NEEDS", "eval_main", "render_main", "train_main"]
+__all__ = ["EXTRAS", "NEEDS", "eval_main", "render_main", "study_main", "train_main"]
 
 #: Extra -> the top-level modules it installs that the commands import.
 EXTRAS: dict[str, tuple[str, ...]] = {
@@ -32,6 +33,8 @@ NEEDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "eval": ("cli", ("hydra", "omegaconf", "tqdm")),
     "render": ("cli", ("hydra", "omegaconf", "matplotlib", "PIL")),
     "train": ("train", EXTRAS["cli"] + EXTRAS["train"]),
+    # The paper's tables evaluate the shipped learned policies.
+    "study": ("train", EXTRAS["cli"] + EXTRAS["train"]),
 }
 
 
@@ -82,3 +85,8 @@ def render_main() -> None:
 def train_main() -> None:
     """``rtaw-train`` (:mod:`rtaw_marl.cli.train`)."""
     _run("train")
+
+
+def study_main() -> None:
+    """``rtaw-study`` (:mod:`rtaw_marl.cli.study`)."""
+    _run("study")

@@ -17,7 +17,7 @@ import yaml
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
-from rtaw_marl.evaluation.config import EvalConfig, RenderConfig
+from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, StudyConfig
 from rtaw_marl.models.config import MODELS
 from rtaw_marl.policies.pretrained.registry import CONTINUED, PRETRAINED
 from rtaw_marl.sim.config import SimConfig
@@ -38,7 +38,12 @@ GROUPS: dict[str, dict[str, type]] = {
 }
 
 #: Primary configs -> their schema.
-APPS: dict[str, type] = {"eval": EvalConfig, "train": TrainConfig, "render": RenderConfig}
+APPS: dict[str, type] = {
+    "eval": EvalConfig,
+    "train": TrainConfig,
+    "render": RenderConfig,
+    "study": StudyConfig,
+}
 
 _registered = False
 

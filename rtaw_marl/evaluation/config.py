@@ -12,7 +12,7 @@ from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import seed_value
 from rtaw_marl.utils.checks import at_least, check_fields
 
-__all__ = ["EvalConfig", "RenderConfig"]
+__all__ = ["EvalConfig", "RenderConfig", "StudyConfig"]
 
 
 @dataclass(kw_only=True)
@@ -108,3 +108,49 @@ class RenderConfig(SimGroups):
             at_least(self, "", 0, "stop")
         if self.cell_px is not None:
             at_least(self, "", 1, "cell_px")
+
+
+@dataclass(kw_only=True)
+class StudyConfig:
+    """An ``rtaw-study`` run: a study's policies x scenarios x seeds, then its tables.
+
+    Attributes:
+        study: The study (``rtaw_marl.evaluation.studies.STUDIES``): ``table1_paper``,
+            ``table1_drain``, ``table2``, ``table2_hindsight``, ``transfer``,
+            ``navigators``, ``budget_gain``, ``lookahead_horizon``.
+        seeds: Episode seeds; ``None``: the study's own (the evaluation seeds 0-19, the
+            selection seeds 1000-1019 for ``lookahead_horizon``).
+        workers: Evaluation processes (a study's settings run in parallel).
+        output: The run folder (``<study>.json`` and one episode journal per setting);
+            ``None``: the Hydra run folder.
+        resume: Take the episodes already journalled in ``output`` (a killed study).
+        docs: A docs folder (the repository's ``docs``); the stored results a study pairs
+            with are read from ``<docs>/data/``.
+        reuse: Take the rules' per-seed TTDs from ``<docs>/data/<study>.json`` instead of
+            running them (a rule's episode depends on the seed only); needs ``docs``.
+        write: Rewrite the study's section of its page in ``docs`` and its
+            ``<docs>/data/<study>.json``; needs ``docs``.
+    """
+
+    study: str = "table1_paper"
+    seeds: Any = None
+    workers: int = 1
+    output: str | None = None
+    resume: bool = False
+    docs: str | None = None
+    reuse: bool = False
+    write: bool = False
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        at_least(self, "", 1, "workers")
+        if self.seeds is not None:
+            if not isinstance(self.seeds, (list, tuple)) or not self.seeds:
+                raise ConfigError(f"seeds must be a non-empty list of integers, got {self.seeds}")
+            for i, seed in enumerate(self.seeds):
+                seed_value(seed, f"seeds[{i}]")
+            if len(set(self.seeds)) < len(self.seeds):
+                raise ConfigError(f"seeds must not repeat a seed, got {list(self.seeds)}")
+        for key in ("reuse", "write"):
+            if getattr(self, key) and self.docs is None:
+                raise ConfigError(f"{key}=true needs docs=FOLDER (the repository's docs)")

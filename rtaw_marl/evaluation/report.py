@@ -23,10 +23,12 @@ from rtaw_marl.utils.atomic import atomic_write
 __all__ = [
     "HINDSIGHT",
     "comparisons",
+    "diff_cell",
     "format_table",
     "gap_to_bound",
     "improvement",
     "json_safe",
+    "markdown_table",
     "write_json_atomic",
 ]
 
@@ -127,7 +129,9 @@ def _mean_ci(values: Sequence[float], confidence: float) -> str:
     return f"{mean:.2f}" if half is None else f"{mean:.2f} ± {half:.2f}"
 
 
-def _diff_cell(diff: PairedDiff) -> str:
+def diff_cell(diff: PairedDiff) -> str:
+    """``+3.1% [+1.2, +5.0]*``: a paired difference in percent of the baseline, its
+    interval, ``*`` where the interval excludes 0."""
     if diff.pct is None:
         return "n/a"
     if diff.pct_low is None or diff.pct_high is None:
@@ -209,11 +213,10 @@ def format_table(
         header.append("hindsight share")
     if lower_bound is not None:
         header.append("gap to bound")
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    rows = []
     if lower_bound is not None:
         bound_row = ["lower bound", _mean_ci(lower_bound, confidence)]
-        bound_row += [""] * (len(header) - len(bound_row))
-        lines.append("| " + " | ".join(bound_row) + " |")
+        rows.append(bound_row + [""] * (len(header) - len(bound_row)))
     for name, metrics in results.items():
         label = (
             f"{name} (reference: knows the future)" if with_share and name == hindsight else name
@@ -226,16 +229,22 @@ def format_table(
             f"{np.mean(metrics['wall_time_s']):.3f}",
         ]
         entry = compared[name]
-        row += [_diff_cell(entry.vs[base]) if base in entry.vs else "—" for base in baselines]
+        row += [diff_cell(entry.vs[base]) if base in entry.vs else "—" for base in baselines]
         if with_share:
             # The share is 0 and 1 by definition on the two references' own rows.
             row.append("—" if name in (reference, hindsight) else _share_cell(entry.share))
         if lower_bound is not None:
             row.append(f"{np.mean(gap_to_bound(metrics['ttd'], lower_bound)):.1f}%")
-        lines.append("| " + " | ".join(row) + " |")
+        rows.append(row)
     n = min((len(m["ttd"]) for m in results.values()), default=0)
-    lines.append(_legend(n, confidence, baselines, with_share, reference))
-    return "\n".join(lines)
+    legend = _legend(n, confidence, baselines, with_share, reference)
+    return markdown_table(header, rows) + "\n" + legend
+
+
+def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """A markdown table: a header line, its rule, one line per row."""
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    return "\n".join([*lines, *("| " + " | ".join(r) + " |" for r in rows)])
 
 
 def json_safe(value: Any) -> Any:

@@ -45,7 +45,15 @@ from typing import Any
 import numpy as np
 from scipy import stats as sps
 
-__all__ = ["HindsightShare", "PairedDiff", "hindsight_share", "mean_ci", "paired_difference"]
+__all__ = [
+    "HindsightShare",
+    "PairedDiff",
+    "hindsight_share",
+    "mean_ci",
+    "paired_difference",
+    "pooled_difference",
+    "pooled_hindsight_share",
+]
 
 #: Name of the method in the JSON output, so a results file says how it was computed.
 METHOD = "paired Student t-interval over seeds"
@@ -282,3 +290,53 @@ def hindsight_share(
         low=None if half is None else share - half,
         high=None if half is None else share + half,
     )
+
+
+def pooled_difference(
+    pairs: Sequence[tuple[Sequence[float], Sequence[float]]], confidence: float = 0.95
+) -> PairedDiff | None:
+    """One comparison pooled over several settings (the rows of a table).
+
+    Each setting's per-seed differences ``baseline - other`` are put in percent of that
+    setting's baseline mean, so settings of different scales weigh alike; the result is
+    the t-interval of the mean over all setting-seed pairs (its ``mean``, ``low`` and
+    ``high`` are in percent; ``n`` counts the pairs).
+
+    Args:
+        pairs: ``(baseline, other)`` per setting, each one value per seed.
+        confidence: Confidence level of the interval.
+
+    Returns:
+        The pooled difference, or None without any setting.
+    """
+    if not pairs:
+        return None
+    diffs = np.concatenate([100 * (np.asarray(b) - np.asarray(o)) / np.mean(b) for b, o in pairs])
+    return paired_difference(diffs, np.zeros_like(diffs), confidence)
+
+
+def pooled_hindsight_share(
+    rows: Sequence[tuple[Sequence[float], Sequence[float], Sequence[float]]],
+) -> float | None:
+    """The hindsight share pooled over settings, as a ratio of means.
+
+    The mean over settings of ``1 - mean(policy) / mean(mpdm)`` divided by the same for
+    hindsight (not a mean of per-setting shares, which a setting where hindsight gains
+    little would dominate).
+
+    Args:
+        rows: ``(mpdm, policy, hindsight)`` per setting, each one value per seed.
+
+    Returns:
+        The share, or None without any setting or when hindsight gains nothing.
+    """
+    if not rows:
+        return None
+
+    def gain(mpdm: Sequence[float], policy: Sequence[float]) -> float:
+        return 1.0 - float(np.mean(policy) / np.mean(mpdm))
+
+    reference = float(np.mean([gain(m, h) for m, _, h in rows]))
+    if reference <= 0:
+        return None
+    return float(np.mean([gain(m, p) for m, p, _ in rows]) / reference)

@@ -26,7 +26,14 @@ _GENERATED = (
 
 
 def scenario_yaml(s: Scenario) -> str:
-    """The ``scenario=<name>`` config: its groups and the keys it sets."""
+    """The ``scenario=<name>`` config: its groups and the keys it sets.
+
+    ``scenario=default`` sets nothing: each command's own defaults are the default
+    scenario (``rtaw-render`` keeps its SIPP execution); the tests check that
+    ``rtaw-eval`` and ``rtaw-train`` then build :data:`SCENARIOS` ``["default"]``.
+    """
+    if s.name == "default":
+        return "\n".join(["# @package _global_", f"# {s.description}.", _GENERATED]) + "\n"
     lines = ["# @package _global_", f"# {s.description}.", _GENERATED, "defaults:"]
     blocks: list[str] = []
     for group in ("layout", "navigator", "tasks"):

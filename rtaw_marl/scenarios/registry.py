@@ -54,7 +54,7 @@ class Scenario:
 
     def with_env(self, **env: Any) -> Scenario:
         """The same scenario with some simulator keys changed (``episode_mode="paper"``)."""
-        return dataclasses.replace(self, env=MappingProxyType({**self.env, **env}))
+        return dataclasses.replace(self, env={**self.env, **env})
 
     def choice(self, group: str) -> tuple[str, dict[str, Any]]:
         """The option name of ``group`` (``layout``, ``navigator``, ``tasks``) and the
@@ -84,11 +84,7 @@ def _value(value: Any) -> str:
 
 
 def _scenario(name: str, title: str, description: str, **fields: Any) -> Scenario:
-    env = MappingProxyType(dict(fields.pop("env", {})))
-    policies = MappingProxyType(dict(fields.pop("policies", {})))
-    return Scenario(
-        name=name, title=title, description=description, env=env, policies=policies, **fields
-    )
+    return Scenario(name=name, title=title, description=description, **fields)
 
 
 #: Table I's robot counts: each row runs with 10 and with 100 robots.
