@@ -38,6 +38,7 @@ __all__ = [
     "Study",
     "StudyResult",
     "Ttd",
+    "checkpoint",
     "learned",
     "load_result",
     "replace_section",
@@ -52,11 +53,13 @@ Ttd = dict[str, list[float]]
 
 @dataclass(frozen=True)
 class PolicyRef:
-    """What a table label stands for: a rule by name or a shipped learned policy.
+    """What a table label stands for: a rule by name, a shipped learned policy, or a
+    checkpoint file (a training run's).
 
     Attributes:
-        kind: ``"rule"`` (:data:`~rtaw_marl.policies.BASELINES`) or ``"pretrained"``.
-        name: The rule's or the shipped policy's registry name.
+        kind: ``"rule"`` (:data:`~rtaw_marl.policies.BASELINES`), ``"pretrained"`` or
+            ``"checkpoint"``.
+        name: The rule's or the shipped policy's registry name, or the checkpoint path.
         params: A rule's parameters (:class:`~rtaw_marl.policies.BaselinesConfig`
             keys), as ``(key, value)`` pairs.
     """
@@ -71,9 +74,8 @@ class PolicyRef:
             params = BaselinesConfig(**dict(self.params))
             return make_baseline(self.name, sim.navigator, sim.layout.scale, params)
         from rtaw_marl.policies.network import load_policy  # torch: only when needed
-        from rtaw_marl.policies.pretrained.registry import pretrained_path
 
-        return load_policy(pretrained_path(self.name), name=label)
+        return load_policy(self._path(), name=label)
 
     def loads(self) -> str | None:
         """None if the policy can be built, else why not (a missing or broken file)."""
@@ -81,12 +83,18 @@ class PolicyRef:
             return None
         try:
             from rtaw_marl.policies.network import load_policy
-            from rtaw_marl.policies.pretrained.registry import pretrained_path
 
-            load_policy(pretrained_path(self.name))
+            load_policy(self._path())
         except (ConfigError, ModuleNotFoundError) as err:
             return " ".join(str(err).split())
         return None
+
+    def _path(self) -> Path:
+        if self.kind == "checkpoint":
+            return Path(self.name)
+        from rtaw_marl.policies.pretrained.registry import pretrained_path
+
+        return pretrained_path(self.name)
 
 
 def rule(name: str, **params: Any) -> PolicyRef:
@@ -101,6 +109,11 @@ def rule(name: str, **params: Any) -> PolicyRef:
 def learned(name: str) -> PolicyRef:
     """A shipped learned policy (a pretrained registry name)."""
     return PolicyRef("pretrained", name)
+
+
+def checkpoint(path: str | Path) -> PolicyRef:
+    """A learned policy from a checkpoint file (``runs/x/checkpoints/best.pt``)."""
+    return PolicyRef("checkpoint", str(path))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -14,6 +14,7 @@ from rtaw_marl.evaluation.study import (
     Cell,
     Study,
     StudyResult,
+    checkpoint,
     learned,
     load_result,
     replace_section,
@@ -142,3 +143,12 @@ def test_only_the_horizon_check_uses_selection_seeds() -> None:
 def test_unknown_study_lists_them() -> None:
     with pytest.raises(ConfigError, match=r"unknown study 'table3'.*table1_paper"):
         study("table3")
+
+
+def test_a_checkpoint_file_is_a_learned_policy(tmp_path: Path) -> None:
+    from rtaw_marl.policies.pretrained.registry import pretrained_path
+
+    path = pretrained_path("C_astar_m10_long_plus")
+    by_file = run_study(_study({"RTAW+": checkpoint(path)}), [0], tmp_path / "a")
+    by_name = run_study(_study({"RTAW+": learned("C_astar_m10_long_plus")}), [0], tmp_path / "b")
+    assert by_file.ttd == by_name.ttd
