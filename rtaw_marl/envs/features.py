@@ -1,9 +1,14 @@
-"""Observation features, shared by every env adapter and by the evaluation policies.
+"""The observation of a decision: ONE builder, shared by every env adapter and policy.
 
-Both the PettingZoo env and the batched TorchRL env call these functions, so the two
-produce bit-identical observations. They work on one simulator's arrays or on stacked
-``[B, ...]`` arrays alike. Lengths and times are divided by the layout scale
-``L = max(W, H)`` (computed in float64, stored as float32).
+:func:`decision_features` computes the acting robot's features (or several robots'
+views at once) from a :class:`Decision`, the arrays of one simulator or of a batch of
+``B`` simulators stacked as ``[B, ...]``. The PettingZoo env (every agent's view), the
+Gymnasium env, the batched TorchRL env and the policies' ``act_sim`` fast path all call
+it, so their observations are bit-identical by construction. Lengths and times are
+divided by the layout scale ``L = max(W, H)`` (computed in float64, stored as float32);
+the action mask is ``bool`` here (the PettingZoo and Gymnasium adapters hand it out as
+``int8``, their libraries' convention). :func:`feature_shapes` is the one place shapes
+are written.
 
 Two feature sets are produced side by side:
 
@@ -12,11 +17,15 @@ Two feature sets are produced side by side:
   paper's network would have to learn from coordinates, computed with the navigator's
   distances. A robot's *arrival* at a task is its time until free plus the distance from
   the cell where it will be free to the task's origin; the acting robot is free now, so
-  its arrival is its distance ``k``. *Rivals* are the other robots, ranked by arrival.
+  its arrival is its distance ``k``. *Rivals* are the other robots, ranked by arrival
+  minus ``k`` (ties: the lowest robot id).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from dataclasses import dataclass
+from math import prod
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -25,6 +34,7 @@ if TYPE_CHECKING:
     from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = [
+    "FEATURES",
     "MISSING",
     "NUM_RIVALS",
     "OBSERVATION_KEYS",
@@ -34,7 +44,9 @@ __all__ = [
     "ROBOT_FEATURES",
     "SOFTMIN_TEMPERATURE",
     "TASK_FEATURES",
-    "all_relational_features",
+    "Decision",
+    "decision_features",
+    "feature_shapes",
     "relational_features",
     "robot_features",
     "sim_observation",
@@ -42,7 +54,9 @@ __all__ = [
     "task_features",
 ]
 
-#: Observation keys of the free robot's decision, in the networks' argument order.
+#: Every feature key, in the order of the flat vector (``observation="full"``).
+FEATURES = ("robots", "tasks", "agent", "relations", "rivals")
+#: Observation keys of the free robot's decision, in the paper network's argument order.
 OBSERVATION_KEYS = ("robots", "tasks", "agent", "action_mask")
 #: Keys of the relational features (``model=rtaw_plus``).
 RELATIONAL_KEYS = ("relations", "rivals")
@@ -70,6 +84,115 @@ NUM_RIVALS = 8
 MISSING = 2.0
 #: Temperature of the rivals' soft-min, in units of ``L``.
 SOFTMIN_TEMPERATURE = 0.05
+
+
+def feature_shapes(num_robots: int, queue_len: int) -> dict[str, tuple[int, ...]]:
+    """Shape of each entry of one robot's view (``action_mask`` last): ``M``, ``N`` given."""
+    m, n = num_robots, queue_len
+    return {
+        "robots": (m, len(ROBOT_FEATURES)),
+        "tasks": (n, len(TASK_FEATURES)),
+        "agent": (len(ROBOT_FEATURES),),
+        "relations": (n, len(RELATION_FEATURES)),
+        "rivals": (n, NUM_RIVALS, len(RIVAL_FEATURES)),
+        "action_mask": (n,),
+    }
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The arrays a decision's observation is computed from.
+
+    Leading dimensions ``...`` are none for one simulator and ``[B]`` for a batch. The
+    arrays are read, never written. The optional ones are needed by some keys only:
+    ``own_distances`` by ``tasks``; ``distances``, ``waits`` and ``chain`` by the
+    relational keys and by views of other robots (:func:`decision_features`).
+
+    Attributes:
+        robot_xy: ``int [..., M, 2]`` the cell where each robot will next be free.
+        free_at: ``float64 [..., M]`` when each robot is free.
+        time: ``float64 [...]`` the decision time.
+        robot: ``int [...]`` the acting robot.
+        queue_rows: ``int [..., N, 4]`` task cells per slot (zeros when empty).
+        queue_length: ``float64 [..., N]`` task lengths (0 when empty).
+        queue_mask: ``bool [..., N]`` which slots hold a task.
+        scale: ``L``.
+        own_distances: ``float64 [..., N]`` the acting robot's distance to each origin.
+        distances: ``float64 [..., M, N]`` every robot's distance to each origin.
+        waits: ``float64 [..., N]`` time each task has waited in the queue.
+        chain: ``float64 [..., N, N]`` from each queued destination to each origin.
+    """
+
+    robot_xy: np.ndarray
+    free_at: np.ndarray
+    time: np.ndarray | float
+    robot: np.ndarray | int
+    queue_rows: np.ndarray
+    queue_length: np.ndarray
+    queue_mask: np.ndarray
+    scale: float
+    own_distances: np.ndarray | None = None
+    distances: np.ndarray | None = None
+    waits: np.ndarray | None = None
+    chain: np.ndarray | None = None
+
+    @classmethod
+    def of_sim(cls, sim: WarehouseSim, keys: Iterable[str] = FEATURES) -> Decision:
+        """``sim``'s current decision, with only the arrays that ``keys`` need."""
+        keys = set(keys)
+        relational = bool(keys & set(RELATIONAL_KEYS))
+        return cls(
+            sim.robot_xy, sim.robot_free_at, sim.time, sim.robot, sim.queue_rows,
+            sim.queue_length, sim.queue_mask, sim.layout.scale,
+            own_distances=sim.robot_distances() if "tasks" in keys else None,
+            distances=sim.distance_matrix() if relational else None,
+            waits=sim.queue_waits() if relational else None,
+            chain=sim.chain_distances() if relational else None,
+        )  # fmt: skip
+
+
+def decision_features(
+    decision: Decision, keys: Iterable[str], viewers: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
+    """The observation entries ``keys`` of a decision, computing only what they need.
+
+    Args:
+        decision: The decision's arrays.
+        keys: Feature keys (:data:`FEATURES`); ``action_mask`` is always included.
+        viewers: ``None``: the acting robot's view. ``int [V]`` (one simulator): the
+            views of these robots, as each would see the decision if it were acting.
+
+    Returns:
+        ``{key: array}``: float32 ``[..., *feature_shapes()[key]]`` (``[V, ...]`` with
+        ``viewers``; ``robots`` is then a read-only broadcast of the one table) and
+        ``action_mask`` ``bool [..., N]`` (a copy; with ``viewers``, the acting robot's).
+    """
+    keys, d = set(keys), decision
+    out = {"action_mask": np.array(d.queue_mask, dtype=bool)}
+    if {"robots", "agent"} & keys:
+        rows = robot_features(d.robot_xy, d.free_at, d.time, d.scale)
+        if viewers is not None:
+            out["robots"] = np.broadcast_to(rows, (len(viewers), *rows.shape))
+            out["agent"] = rows[viewers]
+        else:
+            out["robots"] = rows
+            actor = np.asarray(d.robot)[..., None, None]
+            out["agent"] = np.take_along_axis(rows, actor, -2)[..., 0, :]
+    if "tasks" in keys:
+        own = d.own_distances if viewers is None else d.distances[viewers]
+        out["tasks"] = task_features(d.queue_rows, d.queue_length, own, d.queue_mask, d.scale)
+    if set(RELATIONAL_KEYS) & keys:
+        who = np.asarray(d.robot)[..., None] if viewers is None else np.asarray(viewers)
+        remaining = d.free_at - np.asarray(d.time, dtype=np.float64)[..., None]
+        rel, rivals = relational_features(
+            d.distances, remaining, who, d.queue_length, d.waits, d.chain, d.queue_mask,
+            d.scale,
+        )  # fmt: skip
+        # One view per leading index: drop the viewer axis.
+        out["relations"], out["rivals"] = (rel, rivals) if viewers is not None else (
+            rel[..., 0, :, :], rivals[..., 0, :, :, :]
+        )  # fmt: skip
+    return out
 
 
 def robot_features(
@@ -105,14 +228,15 @@ def task_features(
     Args:
         queue_rows: ``int [..., N, 4]`` task cells per slot (zeros when empty).
         queue_length: ``float [..., N]`` task lengths (0 when empty).
-        distance: ``float [..., N]`` distance from the observing robot to each origin.
+        distance: ``float [..., N]`` distance from the observing robot to each origin
+            (``[V, ..., N]`` for several observers of one queue).
         mask: ``bool [..., N]`` which slots hold a task.
         scale: ``L``.
 
     Returns:
-        ``float32 [..., N, 6]``.
+        ``float32 [..., N, 6]`` (the shape of ``distance`` plus the columns).
     """
-    out = np.empty((*queue_length.shape, 6), dtype=np.float32)
+    out = np.empty((*distance.shape, 6), dtype=np.float32)
     out[..., :4] = queue_rows / scale
     out[..., 4] = np.where(mask, distance, 0.0) / scale
     out[..., 5] = queue_length / scale
@@ -122,19 +246,23 @@ def task_features(
 def relational_features(
     distances: np.ndarray,
     remaining: np.ndarray,
-    robot: np.ndarray | int,
+    viewers: np.ndarray,
     lengths: np.ndarray,
     waits: np.ndarray,
     chain: np.ndarray,
     mask: np.ndarray,
     scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Relational task features and rival tokens of the acting robot's decision.
+    """Relational task features and rival tokens of some robots' views of a decision.
+
+    Each view is the one its robot would see as the acting robot: rivals ranked by
+    ``arrival - own arrival``. ``V`` views cost ``O(M N + V N k)`` (one shared ranking;
+    see :func:`_rival_order` for the one difference from ranking each view alone).
 
     Args:
         distances: ``float [..., M, N]`` from each robot's (next free) cell to each origin.
         remaining: ``float [..., M]`` time until each robot is free (0 for the actor).
-        robot: ``int [...]`` the acting robot.
+        viewers: ``int [..., V]`` the robots whose views are computed.
         lengths: ``float [..., N]`` task lengths.
         waits: ``float [..., N]`` time each task has waited in the queue.
         chain: ``float [..., N, N]`` from each queued destination to each queued origin.
@@ -142,108 +270,71 @@ def relational_features(
         scale: ``L``.
 
     Returns:
-        ``relations float32 [..., N, 8]`` (:data:`RELATION_FEATURES`) and ``rivals
-        float32 [..., N, NUM_RIVALS, 4]`` (:data:`RIVAL_FEATURES`, sorted by arrival,
+        ``relations float32 [..., V, N, 8]`` (:data:`RELATION_FEATURES`) and ``rivals
+        float32 [..., V, N, NUM_RIVALS, 4]`` (:data:`RIVAL_FEATURES`, sorted by arrival,
         invalid rows zero); empty slots are all zeros.
     """
-    m = distances.shape[-2]
-    remaining = np.maximum(remaining, 0.0)
-    arrival = np.swapaxes(distances + remaining[..., :, None], -1, -2)  # [..., N, M]
-    actor = np.asarray(robot)[..., None, None]
-    is_actor = np.arange(m) == actor  # [..., 1, M]
-    own = np.take_along_axis(arrival, np.broadcast_to(actor, (*arrival.shape[:-1], 1)), -1)
-    delta = np.where(is_actor, np.inf, arrival - own)  # rivals only: [..., N, M]
+    lead, (m, n) = distances.shape[:-2], distances.shape[-2:]
+    p, v = prod(lead), np.shape(viewers)[-1]
+    dist = distances.reshape(p, m, n)
+    rem = np.maximum(remaining, 0.0).reshape(p, m)
+    who = np.broadcast_to(viewers, (*lead, v)).reshape(p, v)
+    arrival = np.swapaxes(dist + rem[:, :, None], -1, -2)  # [P, N, M]
+    pi, task = np.arange(p)[:, None, None], np.arange(n)[None, :, None]
+    own = np.swapaxes(arrival[pi, task, who[:, None, :]], -1, -2)  # [P, V, N]
     k = min(NUM_RIVALS, m - 1)
-    order = _first(delta, k)
-    ranked = np.take_along_axis(delta, order, -1)  # [..., N, k]
 
-    rel = np.zeros((*mask.shape, len(RELATION_FEATURES)), dtype=np.float64)
-    rel[..., 0] = own[..., 0]
-    rel[..., 1] = lengths
-    rel[..., 2] = waits
-    rel[..., 3:6] = MISSING * scale
-    top = min(k, 3)
-    rel[..., 3 : 3 + top] = ranked[..., :top]
-    rel[..., 6] = _softmin(ranked, SOFTMIN_TEMPERATURE * scale) if k else MISSING * scale
-    rel[..., 7] = _nearest_other(chain, mask, MISSING * scale)
-    rel = np.where(mask[..., None], rel / scale, 0.0)
-
-    rivals = np.zeros((*mask.shape, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float64)
-    rivals[..., :k, 0] = ranked
-    rivals[..., :k, 1] = np.take_along_axis(
-        np.broadcast_to(remaining[..., None, :], arrival.shape), order, -1
-    )
-    rivals[..., :k, 2] = np.take_along_axis(np.swapaxes(distances, -1, -2), order, -1)
-    rivals[..., :k, :3] /= scale
-    rivals[..., :k, 3] = 1.0
-    rivals = np.where(mask[..., None, None], rivals, 0.0)
-    return rel.astype(np.float32), rivals.astype(np.float32)
-
-
-def all_relational_features(
-    distances: np.ndarray,
-    remaining: np.ndarray,
-    lengths: np.ndarray,
-    waits: np.ndarray,
-    chain: np.ndarray,
-    mask: np.ndarray,
-    scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`relational_features` of every robot's view of one decision at once.
-
-    A robot's rivals at a task are the other robots in order of arrival, so one ranking
-    of all robots per task serves every view: robot ``r``'s ``k`` first rivals are the
-    ``k + 1`` first arrivals less ``r`` (or the ``k`` first when ``r`` is not among
-    them). That costs ``O(M N)`` per decision instead of ``O(M^2 N)`` for ``M`` calls of
-    :func:`relational_features`. Values are the same float operations; only the order of
-    rivals with exactly equal arrivals may differ.
-
-    Args:
-        distances: ``float [M, N]`` from each robot's (next free) cell to each origin.
-        remaining: ``float [M]`` time until each robot is free.
-        lengths: ``float [N]`` task lengths.
-        waits: ``float [N]`` time each task has waited in the queue.
-        chain: ``float [N, N]`` from each queued destination to each queued origin.
-        mask: ``bool [N]`` which slots hold a task.
-        scale: ``L``.
-
-    Returns:
-        ``relations float32 [M, N, 8]`` and ``rivals float32 [M, N, NUM_RIVALS, 4]``: row
-        ``r`` is ``relational_features(..., robot=r, ...)``.
-    """
-    m, n = distances.shape
-    remaining = np.maximum(remaining, 0.0)
-    arrival = distances.T + remaining  # [N, M]
-    own = arrival.T  # [M, N]: each robot's own arrival
-    k = min(NUM_RIVALS, m - 1)
-    rel = np.zeros((m, n, len(RELATION_FEATURES)), dtype=np.float64)
+    rel = np.zeros((p, v, n, len(RELATION_FEATURES)), dtype=np.float64)
     rel[..., 0] = own
-    rel[..., 1] = lengths
-    rel[..., 2] = waits
-    rel[..., 3:6] = MISSING * scale
-    rel[..., 6] = MISSING * scale
-    rel[..., 7] = _nearest_other(chain, mask, MISSING * scale)
-    rivals = np.zeros((m, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float64)
+    rel[..., 1] = lengths.reshape(p, 1, n)
+    rel[..., 2] = waits.reshape(p, 1, n)
+    rel[..., 3:7] = MISSING * scale
+    rel[..., 7] = _nearest_other(chain, mask, MISSING * scale).reshape(p, 1, n)
+    rivals = np.zeros((p, v, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float64)
     if k:
-        top = _first(arrival, k + 1)  # [N, k + 1] robot ids, first arrival first
-        is_self = top == np.arange(m)[:, None, None]  # [M, N, k + 1]
-        keep = ~is_self
-        # Exactly k kept per row: drop the robot itself, or else the (k + 1)-th arrival.
-        keep[..., k] &= is_self.any(-1)
-        order = np.broadcast_to(top, keep.shape)[keep].reshape(m, n, k)  # [M, N, k]
-        task = np.arange(n)[:, None]
-        ranked = arrival[task, order] - own[..., None]  # [M, N, k]
-        top3 = min(k, 3)
-        rel[..., 3 : 3 + top3] = ranked[..., :top3]
+        order = _rival_order(arrival, own, who, k)  # [P, V, N, k] robot ids
+        pk, tk = pi[..., None], np.arange(n)[None, None, :, None]
+        ranked = arrival[pk, tk, order] - own[..., None]  # [P, V, N, k]
+        top = min(k, 3)
+        rel[..., 3 : 3 + top] = ranked[..., :top]
         rel[..., 6] = _softmin(ranked, SOFTMIN_TEMPERATURE * scale)
         rivals[..., :k, 0] = ranked
-        rivals[..., :k, 1] = remaining[order]
-        rivals[..., :k, 2] = distances.T[task, order]
+        rivals[..., :k, 1] = rem[pk, order]
+        rivals[..., :k, 2] = dist[pk, order, tk]
         rivals[..., :k, :3] /= scale
         rivals[..., :k, 3] = 1.0
-    rel = np.where(mask[:, None], rel / scale, 0.0)
-    rivals = np.where(mask[:, None, None], rivals, 0.0)
-    return rel.astype(np.float32), rivals.astype(np.float32)
+    live = mask.reshape(p, 1, n)
+    rel = np.where(live[..., None], rel / scale, 0.0)
+    rivals = np.where(live[..., None, None], rivals, 0.0)
+    shape = (*lead, v, n)
+    return (
+        rel.astype(np.float32).reshape(*shape, len(RELATION_FEATURES)),
+        rivals.astype(np.float32).reshape(*shape, NUM_RIVALS, len(RIVAL_FEATURES)),
+    )
+
+
+def _rival_order(arrival: np.ndarray, own: np.ndarray, who: np.ndarray, k: int) -> np.ndarray:
+    """``int [P, V, N, k]``: each view's ``k`` first rivals at each task (``arrival
+    [P, N, M]``, ``own [P, V, N]``, ``who [P, V]``).
+
+    One view (the acting robot's, alone or one per simulator of a batch) is ranked on
+    its own, by ``arrival - own``. Several views share one ranking of all robots by
+    arrival: robot ``r``'s ``k`` first rivals are the ``k + 1`` first arrivals less
+    ``r`` (or the ``k`` first when ``r`` is not among them), ``O(M N)`` instead of
+    ``O(V M N)``. The values are the same float operations; only rivals with exactly
+    equal arrivals at the ``k``-th place may be chosen or ordered differently, so a
+    caller that needs the acting row exactly asks for it alone.
+    """
+    if who.shape[-1] == 1:
+        m = arrival.shape[-1]
+        delta = np.where(np.arange(m) == who[:, :, None], np.inf, arrival - own[:, 0, :, None])
+        return _first(delta, k)[:, None]  # [P, 1, N, k]
+    top = _first(arrival, k + 1)  # [P, N, k + 1] robot ids, first arrival first
+    is_self = top[:, None] == who[:, :, None, None]  # [P, V, N, k + 1]
+    keep = ~is_self
+    # Exactly k kept per row: drop the robot itself, or else the (k + 1)-th arrival.
+    keep[..., k] &= is_self.any(-1)
+    return np.broadcast_to(top[:, None], keep.shape)[keep].reshape(*keep.shape[:-1], k)
 
 
 def _first(values: np.ndarray, k: int) -> np.ndarray:
@@ -271,31 +362,13 @@ def _nearest_other(chain: np.ndarray, mask: np.ndarray, missing: float) -> np.nd
 
 
 def sim_relations(sim: WarehouseSim) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`relational_features` of a simulator's current decision (acting robot)."""
-    return relational_features(
-        sim.distance_matrix(),
-        sim.robot_remaining(),
-        sim.robot,
-        sim.queue_length,
-        sim.queue_waits(),
-        sim.chain_distances(),
-        sim.queue_mask,
-        sim.layout.scale,
-    )
+    """``relations [N, 8]`` and ``rivals [N, K, 4]`` of a simulator's acting robot."""
+    obs = decision_features(Decision.of_sim(sim, RELATIONAL_KEYS), RELATIONAL_KEYS)
+    return obs["relations"], obs["rivals"]
 
 
-def sim_observation(sim: WarehouseSim, keys: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The acting robot's observation entries ``keys`` (as the envs give them),
-    computing only what ``keys`` needs."""
-    scale = sim.layout.scale
-    obs = {"action_mask": sim.queue_mask.copy()}
-    if {"robots", "agent"} & set(keys):
-        obs["robots"] = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, scale)
-        obs["agent"] = np.ascontiguousarray(obs["robots"][sim.robot])
-    if "tasks" in keys:
-        obs["tasks"] = task_features(
-            sim.queue_rows, sim.queue_length, sim.robot_distances(), sim.queue_mask, scale
-        )
-    if {"relations", "rivals"} & set(keys):
-        obs["relations"], obs["rivals"] = sim_relations(sim)
-    return obs
+def sim_observation(sim: WarehouseSim, keys: Iterable[str]) -> dict[str, np.ndarray]:
+    """The acting robot's observation entries ``keys`` and ``action_mask`` (bool), as
+    the envs give them (:func:`decision_features`), computing only what ``keys`` need."""
+    keys = tuple(keys)
+    return decision_features(Decision.of_sim(sim, keys), keys)

@@ -14,7 +14,7 @@ Two choices make a layout (:class:`ObservationLayout`):
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from math import prod
 from typing import Any
@@ -23,15 +23,12 @@ import numpy as np
 from gymnasium import spaces
 
 from rtaw_marl.envs.features import (
-    NUM_RIVALS,
-    RELATION_FEATURES,
-    RIVAL_FEATURES,
+    FEATURES,
     ROBOT_FEATURES,
-    TASK_FEATURES,
-    all_relational_features,
-    relational_features,
+    Decision,
+    decision_features,
+    feature_shapes,
     robot_features,
-    task_features,
 )
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.core import WarehouseSim
@@ -44,6 +41,7 @@ __all__ = [
     "AgentViews",
     "Features",
     "ObservationLayout",
+    "read_features",
     "state_vector",
 ]
 
@@ -53,8 +51,8 @@ OBSERVATIONS = ("full", "compact")
 OBS_FORMATS = ("dict", "flat")
 #: Feature keys of each ``observation`` option, in the order of the flat vector.
 FEATURE_KEYS: dict[str, tuple[str, ...]] = {
-    "full": ("robots", "tasks", "agent", "relations", "rivals"),
-    "compact": ("tasks", "agent", "relations", "rivals"),
+    "full": FEATURES,
+    "compact": tuple(key for key in FEATURES if key != "robots"),
 }
 #: Columns of the queue rows of the global state, after the robot table.
 QUEUE_STATE_FEATURES = ("ox", "oy", "dx", "dy", "length", "wait", "queued")
@@ -97,14 +95,7 @@ class ObservationLayout:
     @property
     def shapes(self) -> dict[str, tuple[int, ...]]:
         """Shape of each feature of one agent's observation."""
-        m, n = self.num_robots, self.queue_len
-        every = {
-            "robots": (m, len(ROBOT_FEATURES)),
-            "tasks": (n, len(TASK_FEATURES)),
-            "agent": (len(ROBOT_FEATURES),),
-            "relations": (n, len(RELATION_FEATURES)),
-            "rivals": (n, NUM_RIVALS, len(RIVAL_FEATURES)),
-        }
+        every = feature_shapes(self.num_robots, self.queue_len)
         return {key: every[key] for key in self.keys}
 
     @property
@@ -163,6 +154,49 @@ class ObservationLayout:
         return {
             key: flat[..., slices[key]].reshape(*lead, *shape) for key, shape in self.shapes.items()
         }
+
+
+def read_features(
+    observation: Mapping[str, Any], keys: Iterable[str], reader: str = "this policy"
+) -> dict[str, np.ndarray]:
+    """The feature arrays ``keys`` of one ``rtaw_warehouse_v1`` observation.
+
+    Args:
+        observation: ``{"observation": features, "action_mask": [N]}`` as ``observe`` or
+            ``last()`` give it, with dict or flat features (``observation="full"`` or
+            ``"compact"``; a flat vector's layout is told by its size and ``N``).
+        keys: Feature keys to read (:data:`~rtaw_marl.envs.features.FEATURES`).
+        reader: Who reads them, for the error message.
+
+    Returns:
+        ``{key: float32 array of one agent's shape}`` (views, not copies).
+
+    Raises:
+        ConfigError: The features lack one of ``keys`` (``compact`` has no ``robots``),
+            or a flat vector has no ``rtaw_warehouse_v1`` size.
+    """
+    features = observation["observation"]
+    if not isinstance(features, Mapping):
+        features = _unflatten(np.asarray(features), len(observation["action_mask"]))
+    missing = [key for key in keys if key not in features]
+    if missing:
+        raise ConfigError(
+            f"{reader} reads {', '.join(missing)} from the observation, which has only "
+            f"{', '.join(features)}: build the env with observation='full'"
+        )
+    return {key: np.asarray(features[key]) for key in keys}
+
+
+def _unflatten(flat: np.ndarray, queue_len: int) -> dict[str, np.ndarray]:
+    """A flat vector -> dict features; ``3M + 46N + 3`` values (full) or ``46N + 3``."""
+    robots = flat.shape[-1] - ObservationLayout("compact", "flat", 0, queue_len).flat_size
+    if robots < 0 or robots % len(ROBOT_FEATURES):
+        raise ConfigError(
+            f"a flat observation of {flat.shape[-1]} values with N={queue_len} is not a "
+            f"rtaw_warehouse_v1 layout (3M + 46N + 3 or 46N + 3 values)"
+        )
+    kind = "full" if robots else "compact"
+    return ObservationLayout(kind, "flat", robots // 3, queue_len).unflatten(flat)
 
 
 def state_vector(sim: WarehouseSim) -> np.ndarray:
@@ -257,47 +291,21 @@ class AgentViews:
         sim = self.sim
         if self._stamp == sim.decisions:
             return
-        self._robot_rows = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, self.scale)
+        # Every array once per decision: the acting view and the others' share them.
+        self._decision = Decision.of_sim(sim, FEATURES)
         self._mask = sim.queue_mask.astype(np.int8)
         self._zero_mask = np.zeros(sim.queue_len, dtype=np.int8)
-        self._all_dist = sim.distance_matrix()
-        self._remaining = sim.robot_remaining()
-        self._waits = sim.queue_waits()
-        self._chain = sim.chain_distances()
         self._acting = self._others = self._all = None
         self._stamp = sim.decisions
 
     def _acting_view(self) -> Features:
-        sim = self.sim
-        features = {"robots": self._robot_rows}
-        features["tasks"] = task_features(
-            sim.queue_rows, sim.queue_length, sim.robot_distances(), sim.queue_mask, self.scale
-        )
-        features["agent"] = self._robot_rows[sim.robot].copy()
-        features["relations"], features["rivals"] = relational_features(
-            self._all_dist, self._remaining, sim.robot, sim.queue_length, self._waits,
-            self._chain, sim.queue_mask, self.scale,
-        )  # fmt: skip
-        return self._format(features)
+        return self._format(decision_features(self._decision, self.layout.keys))
 
     def _other_views(self) -> Features:
         """Every robot's view at once: ``[M, ...]`` per feature (or ``[M, flat_size]``)."""
-        sim = self.sim
-        m, n = sim.num_robots, sim.queue_len
-        rows = self._robot_rows
-        features = {"robots": np.broadcast_to(rows, (m, *rows.shape))}
-        features["tasks"] = task_features(
-            np.broadcast_to(sim.queue_rows, (m, n, 4)),
-            np.broadcast_to(sim.queue_length, (m, n)),
-            self._all_dist,
-            np.broadcast_to(sim.queue_mask, (m, n)),
-            self.scale,
-        )
-        features["agent"] = rows
-        features["relations"], features["rivals"] = all_relational_features(
-            self._all_dist, self._remaining, sim.queue_length, self._waits, self._chain,
-            sim.queue_mask, self.scale,
-        )  # fmt: skip
+        viewers = np.arange(self.sim.num_robots)
+        features = decision_features(self._decision, (*self.layout.keys, "agent"), viewers)
+        self._robot_rows = features["agent"]  # [M, 3]: every robot's row, writable
         return self._format(features)
 
     def _format(self, features: dict[str, np.ndarray]) -> Features:

@@ -38,13 +38,11 @@ from torchrl.data import Binary, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from rtaw_marl.envs.features import (
-    NUM_RIVALS,
+    FEATURES,
     OBSERVATION_KEYS,
-    RELATION_FEATURES,
-    RIVAL_FEATURES,
-    relational_features,
-    robot_features,
-    task_features,
+    Decision,
+    decision_features,
+    feature_shapes,
 )
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimFactory, SimSpec
@@ -100,12 +98,9 @@ class BatchedWarehouseEnv(EnvBase):
         self._make_specs(b, m, n)
 
     def _make_specs(self, b: int, m: int, n: int) -> None:
+        shapes = feature_shapes(m, n)
         self.observation_spec = Composite(
-            robots=Unbounded(shape=(b, m, 3), dtype=torch.float32),
-            tasks=Unbounded(shape=(b, n, 6), dtype=torch.float32),
-            agent=Unbounded(shape=(b, 3), dtype=torch.float32),
-            relations=Unbounded(shape=(b, n, len(RELATION_FEATURES)), dtype=torch.float32),
-            rivals=Unbounded(shape=(b, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=torch.float32),
+            {key: Unbounded(shape=(b, *shapes[key]), dtype=torch.float32) for key in FEATURES},
             action_mask=Binary(n=n, shape=(b, n), dtype=torch.bool),
             shape=(b,),
         )
@@ -220,25 +215,17 @@ class BatchedWarehouseEnv(EnvBase):
         self._wait[i] = sim.queue_waits()
 
     def _observation(self) -> TensorDict:
-        robots = robot_features(self._robot_xy, self._free_at, self._time, self.scale)
-        tasks = task_features(self._rows, self._length, self._dist, self._mask, self.scale)
-        agent = robots[np.arange(self.num_envs), self._robot]
-        relations, rivals = relational_features(
-            self._all_dist, self._free_at - self._time[:, None], self._robot, self._length,
-            self._wait, self._chain, self._mask, self.scale,
+        decision = Decision(
+            self._robot_xy, self._free_at, self._time, self._robot, self._rows, self._length,
+            self._mask, self.scale, own_distances=self._dist, distances=self._all_dist,
+            waits=self._wait, chain=self._chain,
         )  # fmt: skip
-        mask = torch.from_numpy(self._mask.copy())
+        features = decision_features(decision, FEATURES)
+        mask = torch.from_numpy(features["action_mask"])
         # A masked action spec makes random policies (and check_env_specs) pick valid slots.
         self._action_spec_unbatched.update_mask(mask)
         return TensorDict(
-            {
-                "robots": torch.from_numpy(robots),
-                "tasks": torch.from_numpy(tasks),
-                "agent": torch.from_numpy(agent),
-                "relations": torch.from_numpy(relations),
-                "rivals": torch.from_numpy(rivals),
-                "action_mask": mask,
-            },
+            {key: torch.from_numpy(features[key]) for key in (*FEATURES, "action_mask")},
             batch_size=self.batch_size,
         )
 

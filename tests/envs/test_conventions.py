@@ -22,7 +22,7 @@ from pettingzoo.test import api_test, performance_benchmark, render_test, seed_t
 from pettingzoo.utils.deprecated_module import DeprecatedEnv
 
 from rtaw_marl import warehouse_v0, warehouse_v1
-from rtaw_marl.envs.features import all_relational_features, relational_features
+from rtaw_marl.envs.features import relational_features
 from rtaw_marl.envs.observations import FEATURE_KEYS
 from rtaw_marl.envs.pettingzoo import zero_info
 from rtaw_marl.sim.metrics import EpisodeMetrics
@@ -182,20 +182,24 @@ def test_state_is_the_robot_table_and_the_queue() -> None:
 
 
 def test_views_of_all_robots_equal_the_one_robot_function() -> None:
-    """The batched views of non-acting robots are :func:`relational_features` of each."""
+    """Views of all robots at once (one shared ranking) equal each robot's view alone,
+    where no two arrivals are exactly equal."""
     rng = np.random.default_rng(0)
     for m in (1, 2, 9, 10, 40):
         n = 6
         distances, remaining = rng.random((m, n)) * 30, rng.random(m) * 10
         lengths, waits, chain = rng.random(n), rng.random(n), rng.random((n, n)) * 20
         mask = rng.random(n) > 0.3
-        rel, riv = all_relational_features(distances, remaining, lengths, waits, chain, mask, 23.0)
+        every = np.arange(m)
+        rel, riv = relational_features(
+            distances, remaining, every, lengths, waits, chain, mask, 23.0
+        )
         for robot in range(m):
             one = relational_features(
-                distances, remaining, robot, lengths, waits, chain, mask, 23.0
+                distances, remaining, [robot], lengths, waits, chain, mask, 23.0
             )
-            np.testing.assert_array_equal(rel[robot], one[0])
-            np.testing.assert_array_equal(riv[robot], one[1])
+            np.testing.assert_array_equal(rel[robot], one[0][0])
+            np.testing.assert_array_equal(riv[robot], one[1][0])
 
 
 # --------------------------------------------------------------------------- infos
