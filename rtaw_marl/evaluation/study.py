@@ -141,11 +141,13 @@ class StudyResult:
         seeds: The seeds of every cell (a study's cells share them).
         ttd: Cell key -> label -> TTD per seed.
         seconds: Cell key -> label -> mean seconds per episode (labels run this time).
+        extra: What a study with its own ``run`` measured besides (JSON-ready).
     """
 
     seeds: list[int]
     ttd: dict[str, Ttd]
     seconds: dict[str, dict[str, float]] = field(default_factory=dict)
+    extra: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -162,6 +164,9 @@ class Study:
         store: Whether ``docs/data/<name>.json`` keeps its per-seed TTDs.
         default_seeds: Its seeds when none are given.
         pairs_with: Studies whose stored per-seed TTDs its tables pair with.
+        run: Replaces :func:`run_study`'s episodes for a study that measures more than
+            TTDs (``run(cells, output, workers, resume) -> StudyResult``; the decision
+            analysis of docs/analysis.md); ``None``: every cell's policies are evaluated.
     """
 
     name: str
@@ -172,6 +177,7 @@ class Study:
     store: bool = True
     default_seeds: tuple[int, ...] = tuple(range(20))
     pairs_with: tuple[str, ...] = ()
+    run: Callable[[list[Cell], Path, int, bool], StudyResult] | None = None
 
 
 def run_study(
@@ -198,6 +204,8 @@ def run_study(
         is missing or does not load is left out, with one warning line on stderr.
     """
     cells = study.cells(list(seeds))
+    if study.run is not None:
+        return study.run(cells, output, workers, resume)
     kept = _reusable(reuse, list(seeds))
     jobs, ttd = [], {}
     for cell in cells:

@@ -16,7 +16,7 @@ from scipy import stats as scipy_stats
 
 from rtaw_marl.cli.common import typed
 from rtaw_marl.cli.eval import run
-from rtaw_marl.config import CONF_DIR, compose
+from rtaw_marl.config import CONF_DIR, compose, to_typed
 
 GROUPS = ("env", "layout", "navigator", "tasks", "scenario", "row", "experiment")
 GLOBAL_GROUPS = ("scenario", "row", "experiment")  # packaged at the top level
@@ -337,26 +337,24 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     assert (cfg.layout.preset, cfg.navigator.name) == ("D", "astar")
     assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10_long"]
     assert cfg.env.episode_mode == "paper"
-    assert list(cfg.policy) == ["mpdm", "rbts", "rtaw"]
+    assert list(cfg.policy) == ["mpdm", "rbts", "lookahead", "hungarian", "hindsight", "rtaw"]
+    assert list(cfg.seeds) == list(range(20))
 
 
-def test_row_configs_select_the_policies_of_table_one() -> None:
-    """row=X (10 robots) and row=X_m100 (100 robots) run the setting and the shipped
-    policies (RTAW+, then the paper's network) that experiments/paper_tables.py puts in
-    that Table I row."""
-    from experiment_scripts import load_experiment
+def test_table1_experiment_is_the_study_of_table_one() -> None:
+    """Each job of experiment=table1 evaluates the setting, seeds and shipped policies of
+    that row of the table1_paper study (the sweep is the same evaluation on a cluster)."""
+    from rtaw_marl.evaluation.studies import STUDIES
+    from rtaw_marl.scenarios import ROWS, SCENARIOS
 
-    pt = load_experiment("paper_tables")
-    names = {"Direct (open 60x60)": "direct", **{f"A* layout {p}": p for p in "ABCDE"}}
-    for label, layout, navigator, pretrained in pt.ROWS:
-        for m in (10, 100):
-            row = names[label] + ("_m100" if m == 100 else "")
-            cfg = compose(config_name="eval", overrides=[f"row={row}"])
-            assert cfg.env.num_robots == m
-            assert cfg.navigator.name == navigator
-            assert cfg.layout.get("preset", cfg.layout.name) == layout.get("preset", layout["name"])
-            entry = f"{pretrained[m]}_long"
-            assert list(cfg.pretrained) == [entry + pt.LEARNED["RTAW+"], entry + pt.LEARNED["RTAW"]]
+    cells = {c.key: c for c in STUDIES["table1_paper"].cells(list(range(20)))}
+    for row, name in ROWS.items():
+        cfg = compose(config_name="eval", overrides=["experiment=table1", f"row={row}"])
+        cell = cells[SCENARIOS[name].title]
+        assert to_typed(cfg).sim_spec() == cell.scenario.spec()
+        assert list(cfg.seeds) == list(cell.seeds)
+        learned = [ref.name for label, ref in cell.policies.items() if ref.kind == "pretrained"]
+        assert sorted(cfg.pretrained) == sorted(learned)
 
 
 RULES = "policy=[mpdm,rbts,lookahead,hungarian,hindsight]"
