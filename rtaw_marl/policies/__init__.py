@@ -1,16 +1,26 @@
 """Allocation policies: the classical rules, stronger hand-written rules, the hindsight
-reference, and (in :mod:`.network`, needs torch) trained RTAW networks."""
+reference, and trained RTAW networks, all behind one interface (:class:`Policy`:
+``name``, ``reset(seed)``, ``act(observation)``, ``act_sim(sim)``).
+
+``load_policy`` and ``NetworkPolicy`` (:mod:`.network`) need torch; they are imported
+on first use, so ``import rtaw_marl.policies`` stays light.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
-from rtaw_marl.errors import unknown_name
+from rtaw_marl.errors import ConfigError, unknown_name
+from rtaw_marl.policies.base import Policy, simulator_of
 from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, RandomPolicy
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.policies.hindsight import Hindsight
 from rtaw_marl.policies.lookahead import Hungarian, Lookahead
 from rtaw_marl.sim.navigation import Navigator
+
+if TYPE_CHECKING:
+    from rtaw_marl.policies.network import NetworkPolicy, load_policy
 
 __all__ = [
     "BASELINES",
@@ -21,7 +31,10 @@ __all__ = [
     "Hindsight",
     "Hungarian",
     "Lookahead",
+    "NetworkPolicy",
+    "Policy",
     "RandomPolicy",
+    "load_policy",
     "make_baseline",
 ]
 
@@ -37,12 +50,17 @@ BASELINES: dict[str, _Factory] = {
     Hindsight.name: lambda nav, scale, p: Hindsight(p.hindsight_horizon),
 }
 
+#: Names served lazily from :mod:`.network` (torch).
+_NETWORK = ("NetworkPolicy", "load_policy")
+
 
 def make_baseline(
     name: str,
     navigator: Navigator | None = None,
     scale: float = 1.0,
     params: BaselinesConfig | None = None,
+    *,
+    env: Any = None,
 ) -> BaselinePolicy | Hindsight:
     """Build the rule registered as ``name``.
 
@@ -51,12 +69,32 @@ def make_baseline(
         navigator: The env's navigator (needed by rules acting on observations).
         scale: The observation length scale.
         params: Rule parameters (horizons); the defaults when ``None``.
+        env: A PettingZoo or Gymnasium warehouse env (or its ``WarehouseSim``): the rule
+            takes its navigator, scale and completion noise (``BaselinePolicy.bind``), so
+            that ``act(obs)`` on its observations is exactly ``act_sim``. Instead of
+            ``navigator`` and ``scale``.
 
     Raises:
-        ConfigError: Unknown name; the message lists the available ones.
+        ConfigError: Unknown name (the message lists the available ones), or ``env``
+            given together with ``navigator``.
     """
     try:
         factory = BASELINES[name]
     except KeyError:
         raise unknown_name("policy", name, list(BASELINES)) from None
-    return factory(navigator, scale, params or BaselinesConfig())
+    if env is None:
+        return factory(navigator, scale, params or BaselinesConfig())
+    if navigator is not None:
+        raise ConfigError("make_baseline: give env or navigator/scale, not both")
+    sim = simulator_of(env)
+    policy = factory(sim.navigator, sim.layout.scale, params or BaselinesConfig())
+    return policy.bind(sim) if isinstance(policy, BaselinePolicy) else policy
+
+
+def __getattr__(name: str) -> Any:
+    # load_policy and NetworkPolicy need torch: import it on first use only.
+    if name in _NETWORK:
+        from rtaw_marl.policies import network
+
+        return getattr(network, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,10 +1,12 @@
 """Classical allocation rules: MPDM, RBTS and uniform random.
 
-Each rule acts either on the simulator directly (:meth:`BaselinePolicy.act_sim`, the
-fast path used by evaluation) or on a PettingZoo observation (:meth:`act`: the
-``{"observation": features, "action_mask": mask}`` of ``rtaw_warehouse_v1`` with dict
-features; RBTS needs ``observation="full"``), and both paths choose the same task for
-the same state. Ties (within a relative 1e-6) are broken
+Each rule is a :class:`~rtaw_marl.policies.base.Policy`: it acts either on the simulator
+directly (:meth:`BaselinePolicy.act_sim`, the fast path used by evaluation) or on a
+PettingZoo observation (:meth:`act`: the ``{"observation": features, "action_mask":
+mask}`` of ``rtaw_warehouse_v1``, dict or flat; RBTS needs ``observation="full"``), and
+both paths choose the same task for the same state once the rule is bound to the env
+(:meth:`BaselinePolicy.bind`, or ``make_baseline(name, env=env)``), which gives it the
+navigator, the scale and the completion noise's mean. Ties (within a relative 1e-6) are broken
 uniformly at random with the policy's own generator, seeded by :meth:`reset`: in the
 paper's two-task setting MPDM faces two equally close pickups and picks at random.
 
@@ -28,31 +30,29 @@ from typing import Any
 
 import numpy as np
 
+from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.policies.base import simulator_of
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.navigation import Navigator
 
-__all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy", "observation_features"]
+__all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy", "free_times"]
 
 _TIE_RTOL = 1e-6
 
 
-def observation_features(observation: Mapping[str, Any], *keys: str) -> Mapping[str, np.ndarray]:
-    """The feature dict of a ``rtaw_warehouse_v1`` observation, holding ``keys``.
+def free_times(column: np.ndarray, scale: float) -> np.ndarray:
+    """``float64 [M]`` times until free from the observed ``time_until_free / L`` column.
 
-    Raises:
-        ConfigError: The features are a flat vector, or lack one of ``keys`` (the
-            compact observation has no ``robots``).
+    The observation is float32: where a time to the millisecond is what the observation
+    holds (it rounds to the same float32), that time is taken, so that robots freed at
+    the same second still tie (and the lowest id goes first) as in the simulator; other
+    times (with completion noise) keep the observation's own value.
     """
-    features = observation["observation"]
-    if not isinstance(features, Mapping):
-        raise ConfigError("rules read dict features: build the env with obs_format='dict'")
-    missing = [key for key in keys if key not in features]
-    if missing:
-        raise ConfigError(
-            f"this rule reads {missing} from the observation: build the env with observation='full'"
-        )
-    return features
+    column = np.asarray(column, dtype=np.float32)
+    times = column.astype(np.float64) * scale
+    rounded = np.round(times, 3)
+    return np.where((rounded / scale).astype(np.float32) == column, rounded, times)
 
 
 class BaselinePolicy(ABC):
@@ -70,6 +70,8 @@ class BaselinePolicy(ABC):
     def __init__(self, navigator: Navigator | None = None, scale: float = 1.0) -> None:
         self.navigator = navigator
         self.scale = float(scale)
+        #: Mean completion noise, for rules that model it (``None``: the simulator's).
+        self.noise_mean: float | None = None
         # Seeded from the start: a rule used without reset() still breaks ties the same
         # way in every process (an unseeded teacher once made warm starts irreproducible).
         self.reset(0)
@@ -78,6 +80,16 @@ class BaselinePolicy(ABC):
         """Seed the tie-breaking generator (an independent stream of the episode seed;
         fresh entropy for ``None``)."""
         self.rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
+
+    def bind(self, env: Any) -> BaselinePolicy:
+        """Take the navigator, scale and completion noise's mean of ``env`` (a
+        ``WarehouseSim`` or a PettingZoo / Gymnasium warehouse env), so that :meth:`act`
+        on its observations chooses what :meth:`act_sim` chooses; returns ``self``."""
+        sim = simulator_of(env)
+        self.navigator = sim.navigator
+        self.scale = float(sim.layout.scale)
+        self.noise_mean = float(sim.config.noise_mean)
+        return self
 
     @abstractmethod
     def act_sim(self, sim: WarehouseSim) -> int:
@@ -115,7 +127,7 @@ class MPDM(BaselinePolicy):
         return self._nearest(d, sim.queue_mask)
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        tasks = observation_features(observation, "tasks")["tasks"]
+        tasks = read_features(observation, ("tasks",), self.name)["tasks"]
         d = np.asarray(tasks[:, 4], dtype=np.float64) * self.scale
         return self._nearest(d, np.asarray(observation["action_mask"], dtype=bool))
 
@@ -133,9 +145,11 @@ class RBTS(BaselinePolicy):
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         if self.navigator is None:
-            raise ConfigError("RBTS on observations needs the env's navigator")
+            raise ConfigError(
+                "RBTS on observations needs the env's navigator: make_baseline('rbts', env=env)"
+            )
         mask = np.asarray(observation["action_mask"], dtype=bool)
-        features = observation_features(observation, "robots", "tasks", "agent")
+        features = read_features(observation, ("robots", "tasks", "agent"), self.name)
         robots = features["robots"]
         cells = np.rint(robots[:, :2].astype(np.float64) * self.scale).astype(np.int64)
         origins = np.rint(features["tasks"][:, :2].astype(np.float64) * self.scale)

@@ -13,12 +13,18 @@ Rollouts run on a shadow simulator with instant travel, loaded from the real one
 rollout cannot model waiting for other robots: it uses A* distances and the planned
 free times, without noise.
 
+It implements :class:`~rtaw_marl.policies.base.Policy` but acts on the simulator only:
+:meth:`Hindsight.act` raises ``NotImplementedError``.
+
 A decision costs ``N * (horizon + 1)`` simulator steps (about 1 ms per candidate at
 ``horizon = 30``), so a 500-decision episode takes seconds; it is meant for tables, not
 for deployment.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -46,6 +52,18 @@ class Hindsight:
 
     def reset(self, seed: int | None = None) -> None:
         """Nothing to seed: the choice is deterministic (ties: the lowest slot)."""
+
+    def act(self, observation: Mapping[str, Any]) -> int:
+        """Not available: the reference needs the episode's future (the tasks still to
+        arrive and the noise to come), which no observation holds.
+
+        Raises:
+            NotImplementedError: Always; use :meth:`act_sim` on the simulator.
+        """
+        raise NotImplementedError(
+            "hindsight knows the episode's future (tasks still to arrive, noise to come), "
+            "which no observation holds: it acts only on the simulator, act_sim(sim)"
+        )
 
     def act_sim(self, sim: WarehouseSim) -> int:
         """The queued task whose MPDM rollout over the real future has the least TTD."""

@@ -25,8 +25,9 @@ from collections.abc import Mapping
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.policies.baselines import BaselinePolicy, observation_features
+from rtaw_marl.policies.baselines import BaselinePolicy, free_times
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.navigation import Navigator
 
@@ -97,7 +98,9 @@ class Lookahead(BaselinePolicy):
         navigator: Distances (also used on the observation path).
         scale: Observation length scale (``Layout.scale``).
         horizon: ``H``, MPDM decisions after the candidate's own (``0``: MPDM).
-        noise_mean: Mean completion noise; on the simulator path the simulator's own.
+        noise_mean: Mean completion noise of the rollouts; ``None`` (default): the
+            simulator's on :meth:`act_sim`, and the env's once bound (:meth:`bind`,
+            ``make_baseline("lookahead", env=env)``), which :meth:`act` needs.
     """
 
     name = "lookahead"
@@ -108,13 +111,13 @@ class Lookahead(BaselinePolicy):
         scale: float = 1.0,
         *,
         horizon: int,
-        noise_mean: float = 0.0,
+        noise_mean: float | None = None,
     ) -> None:
         super().__init__(navigator, scale)
         if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 0:
             raise ConfigError(f"lookahead horizon must be an integer >= 0, got {horizon!r}")
         self.horizon = horizon
-        self.noise_mean = float(noise_mean)
+        self.noise_mean = None if noise_mean is None else float(noise_mean)
 
     def act_sim(self, sim: WarehouseSim) -> int:
         first = sim.robot_distances()
@@ -123,16 +126,20 @@ class Lookahead(BaselinePolicy):
         ends = _end_distances(sim.navigator, sim.robot_xy, sim.queue_rows, sim.queue_mask)
         costs = lookahead_costs(
             first, ends, sim.robot, sim.robot_free_at, sim.time, sim.queue_length,
-            sim.queue_mask, self.horizon, sim.config.noise_mean,
+            sim.queue_mask, self.horizon,
+            sim.config.noise_mean if self.noise_mean is None else self.noise_mean,
         )  # fmt: skip
         return self._nearest(costs, sim.queue_mask)
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        if self.navigator is None:
-            raise ConfigError("lookahead on observations needs the env's navigator")
+        if self.navigator is None or (self.horizon and self.noise_mean is None):
+            raise ConfigError(
+                "lookahead on observations needs the env's navigator and noise mean: "
+                "make_baseline('lookahead', env=env)"
+            )
         mask = np.asarray(observation["action_mask"], dtype=bool)
         keys = ("tasks",) if self.horizon == 0 else ("robots", "tasks", "agent")
-        features = observation_features(observation, *keys)
+        features = read_features(observation, keys, self.name)
         tasks = features["tasks"].astype(np.float64) * self.scale
         first = tasks[:, 4]
         if self.horizon == 0:
@@ -143,11 +150,10 @@ class Lookahead(BaselinePolicy):
         me = _acting_row(robots, features["agent"])
         ends = _end_distances(self.navigator, cells, rows, mask)
         # Observations are float32: distances and lengths are measured again, and free
-        # times recovered to a millisecond, so that a robot freed at the same second as
-        # another still ties with it (and the lowest id goes first), as in the simulator.
+        # times recovered as exactly as the observation allows (free_times).
         lengths = np.zeros(len(mask))
         lengths[mask] = self.navigator.distance(rows[mask, :2], rows[mask, 2:])
-        free = np.round(robots[:, 2] * self.scale, 3)  # time until free: "now" is 0
+        free = free_times(features["robots"][:, 2], self.scale)  # "now" is 0
         costs = lookahead_costs(
             ends[me], ends, me, free, 0.0, lengths, mask, self.horizon, self.noise_mean
         )
@@ -165,16 +171,19 @@ class Hungarian(BaselinePolicy):
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         if self.navigator is None:
-            raise ConfigError("hungarian on observations needs the env's navigator")
+            raise ConfigError(
+                "hungarian on observations needs the env's navigator: "
+                "make_baseline('hungarian', env=env)"
+            )
         mask = np.asarray(observation["action_mask"], dtype=bool)
-        features = observation_features(observation, "robots", "tasks", "agent")
+        features = read_features(observation, ("robots", "tasks", "agent"), self.name)
         robots = features["robots"].astype(np.float64)
         cells = np.rint(robots[:, :2] * self.scale).astype(np.int64)
         origins = np.rint(features["tasks"][:, :2].astype(np.float64) * self.scale)
         dist = np.zeros((len(robots), len(mask)))
         dist[:, mask] = self.navigator.distance_matrix(cells, origins[mask].astype(np.int64))
         me = _acting_row(robots, features["agent"])
-        return self._choose(dist, np.round(robots[:, 2] * self.scale, 3), me, mask)
+        return self._choose(dist, free_times(features["robots"][:, 2], self.scale), me, mask)
 
     def _choose(self, dist: np.ndarray, wait: np.ndarray, robot: int, mask: np.ndarray) -> int:
         slots = np.flatnonzero(mask)

@@ -1,52 +1,125 @@
-"""Trained RTAW networks as greedy policies on the bare simulator, loaded from checkpoints."""
+"""Trained RTAW networks as greedy policies, loaded from checkpoints or the shipped zoo.
+
+A :class:`NetworkPolicy` acts on the bare simulator (``act_sim``, the evaluation's fast
+path) and on ``rtaw_warehouse_v1`` observations (``act``); both feed the network the
+very arrays of :func:`~rtaw_marl.envs.features.decision_features`, so they choose the
+same slot bit for bit. The paper's network (``model=rtaw``) reads ``robots``, ``tasks``
+and ``agent``: it needs ``observation="full"``; RTAW+ (``model=rtaw_plus``) reads
+``relations`` and ``rivals``: ``"full"`` or ``"compact"``; dict or flat features alike.
+"""
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import torch
 
 from rtaw_marl.envs.features import sim_observation
+from rtaw_marl.envs.observations import read_features
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import Actor, load_checkpoint, load_networks
+from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["SimNetworkPolicy", "load_policy"]
+__all__ = ["NetworkPolicy", "SimNetworkPolicy", "load_policy"]
 
 
-def load_policy(path: str | Path, name: str | None = None) -> SimNetworkPolicy:
-    """A greedy policy from a checkpoint; it runs on any ``M``, ``N``, layout or navigator.
+def load_policy(
+    source: str | Path, *, name: str | None = None, torch_threads: int | None = 1
+) -> NetworkPolicy:
+    """A greedy policy from a checkpoint file or a shipped pretrained name.
+
+    The policy runs on any ``M``, ``N``, layout or navigator; see :class:`NetworkPolicy`.
 
     Args:
-        path: The checkpoint file.
-        name: Label in result tables; ``rtaw:<path>`` by default.
+        source: A checkpoint path, or the name of a shipped policy
+            (``rtaw_marl.policies.pretrained.registry.PRETRAINED``, e.g.
+            ``"shelves_astar_m10_plus"``).
+        name: Label in result tables; ``rtaw:<source>`` by default.
+        torch_threads: ``torch.set_num_threads`` for the process (one decision is a small
+            network: with every thread an episode takes about ten times longer);
+            ``None`` leaves torch as it is.
+
+    Returns:
+        The policy: ``act(observation) -> int`` and ``act_sim(sim) -> int``.
 
     Raises:
-        ConfigError: The checkpoint is missing, unreadable, unsafe, for another feature
-            layout, or its weights do not fit its model.
+        ConfigError: ``source`` is neither a file nor a shipped name (the message
+            suggests names), or the checkpoint is unreadable, unsafe, for another
+            feature layout, or its weights do not fit its model.
     """
+    path = _resolve(source)
+    if torch_threads is not None:
+        torch.set_num_threads(int(torch_threads))
     actor, _ = load_networks(load_checkpoint(path), path)
-    return SimNetworkPolicy(actor, name=name or f"rtaw:{path}")
+    return NetworkPolicy(actor, name=name or f"rtaw:{source}")
 
 
-class SimNetworkPolicy:
-    """Greedy (argmax) RTAW decisions on a bare simulator, for evaluation.
+def _resolve(source: str | Path) -> Path:
+    """The checkpoint file of a path or shipped name."""
+    path = Path(source)
+    if path.is_file() or isinstance(source, Path):
+        return path
+    if source in PRETRAINED:
+        return pretrained_path(source)
+    close = difflib.get_close_matches(str(source), list(PRETRAINED), n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    raise ConfigError(
+        f"{source!r} is neither a checkpoint file nor a shipped pretrained policy{hint} "
+        f"Shipped: {', '.join(sorted(PRETRAINED))}"
+    )
+
+
+class NetworkPolicy:
+    """Greedy (argmax) decisions of a trained policy network.
 
     Args:
-        net: A trained policy network.
+        net: A trained actor (``in_keys`` name its observation entries, the action mask
+            last; ``net(*inputs)`` gives logits ``[*, N]``).
         name: Label used in result tables.
     """
 
     def __init__(self, net: Actor, name: str = "rtaw") -> None:
         self.net = net.eval()
         self.name = name
+        self._features = tuple(key for key in net.in_keys if key != "action_mask")
 
     def reset(self, seed: int | None = None) -> None:
         """Nothing to seed: greedy decisions are deterministic."""
 
     @torch.no_grad()
     def act_sim(self, sim: WarehouseSim) -> int:
-        """The slot with the largest logit among the non-empty ones."""
-        obs = sim_observation(sim, self.net.in_keys)
-        logits = self.net(*(torch.from_numpy(obs[key]) for key in self.net.in_keys))
-        mask = torch.from_numpy(obs["action_mask"])
-        return int(torch.where(mask, logits, -torch.inf).argmax())
+        """The slot with the largest logit among the non-empty ones (fast path)."""
+        obs = sim_observation(sim, self._features)
+        return self._argmax([obs[key] for key in self._features], obs["action_mask"])
+
+    @torch.no_grad()
+    def act(self, observation: Mapping[str, Any]) -> int:
+        """The slot with the largest logit, from a ``rtaw_warehouse_v1`` observation.
+
+        Args:
+            observation: ``{"observation": features, "action_mask": int8 [N]}`` (dict or
+                flat features; ``features [...]`` of one agent).
+
+        Raises:
+            ConfigError: The observation lacks a feature the network reads (the paper's
+                network needs ``observation="full"``).
+        """
+        features = read_features(observation, self._features, self.name)
+        mask = np.asarray(observation["action_mask"]).astype(bool)
+        return self._argmax([features[key] for key in self._features], mask)
+
+    def _argmax(self, inputs: list[np.ndarray], mask: np.ndarray) -> int:
+        # np.require: torch wants writable arrays (env observations may be shared views).
+        tensors = [torch.from_numpy(np.require(x, np.float32, "CW")) for x in inputs]
+        m = torch.from_numpy(np.require(mask, bool, "CW"))
+        logits = self.net(*tensors, m)
+        return int(torch.where(m, logits, -torch.inf).argmax())
+
+
+#: The earlier name of :class:`NetworkPolicy`.
+SimNetworkPolicy = NetworkPolicy

@@ -253,8 +253,7 @@ def _run_env(
     )
     env.reset(seed=seed)
     raw = env.unwrapped
-    policy.navigator = raw.navigator
-    policy.scale = raw.scale
+    policy.bind(raw)
     policy.reset(seed)
     actions: list[int] = []
     reward_sum = 0.0

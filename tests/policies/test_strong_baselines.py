@@ -21,7 +21,7 @@ from rtaw_marl.policies import (
 from rtaw_marl.policies.lookahead import lookahead_costs
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.sim.core import WarehouseSim
-from tests.policies.test_baselines import SETTINGS, _run_env, random_sim, run_sim, two_task_sim
+from tests.policies.test_baselines import SETTINGS, random_sim, run_sim, two_task_sim
 
 
 def _lookahead(sim: WarehouseSim, horizon: int) -> Lookahead:
@@ -94,19 +94,8 @@ def test_lookahead_costs_match_the_rule_as_stated(setting: str, horizon: int) ->
     assert checked == 40
 
 
-@pytest.mark.parametrize("name", ["lookahead", "hungarian"])
-@pytest.mark.parametrize("setting", sorted(SETTINGS))
-def test_observation_path_matches_simulator(name: str, setting: str) -> None:
-    """``act`` on PettingZoo observations chooses what ``act_sim`` chooses."""
-    nav_name, layout = SETTINGS[setting]
-    sim = random_sim(nav_name, layout, num_robots=5, noise_mean=0.0, noise_var=0.0)
-    expected, expected_ttd = run_sim(sim, make_baseline(name, sim.navigator), 11)
-    policy = make_baseline(name)
-    actions, reward_ttd, _ = _run_env(
-        policy, 11, nav_name, layout, 5, noise_mean=0.0, noise_var=0.0
-    )
-    assert actions == expected
-    assert reward_ttd == pytest.approx(expected_ttd)
+# act(obs) == act_sim with the default noise, on every navigator:
+# tests/policies/test_policy_interface.py.
 
 
 # ----------------------------------------------------------------- hungarian

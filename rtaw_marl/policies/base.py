@@ -1,0 +1,60 @@
+"""The one policy interface: every rule, the hindsight reference and learned networks.
+
+A policy picks a queue slot for the free robot, in either of two ways that choose the
+same slot for the same state:
+
+* ``act(observation)``: on a ``rtaw_warehouse_v1`` observation ``{"observation":
+  features, "action_mask": [N]}`` (``observe`` / ``last()``; dict or flat features);
+* ``act_sim(sim)``: the fast path on the bare simulator, used by evaluation.
+
+Rules that need more than the observation (the navigator to measure distances, the
+scale, the completion noise's mean) take it from the env when built with
+``make_baseline(name, env=env)``. The ``hindsight`` reference needs the episode's future,
+which no observation holds: its ``act`` raises ``NotImplementedError``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Protocol, runtime_checkable
+
+from rtaw_marl.sim.core import WarehouseSim
+
+__all__ = ["Policy", "simulator_of"]
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """What every policy has.
+
+    Attributes:
+        name: Label in result tables.
+    """
+
+    name: str
+
+    def reset(self, seed: int | None = None) -> None:
+        """Seed the policy's own randomness (tie-breaking) for an episode."""
+
+    def act_sim(self, sim: WarehouseSim) -> int:
+        """The slot for ``sim``'s selected robot (fast path)."""
+
+    def act(self, observation: Mapping[str, Any]) -> int:
+        """The slot for the robot whose ``rtaw_warehouse_v1`` observation this is."""
+
+
+def simulator_of(source: Any) -> WarehouseSim:
+    """The simulator of a ``WarehouseSim``, a PettingZoo or Gymnasium warehouse env
+    (wrapped or not).
+
+    Raises:
+        TypeError: ``source`` is none of those.
+    """
+    if isinstance(source, WarehouseSim):
+        return source
+    sim = getattr(getattr(source, "unwrapped", source), "sim", None)
+    if not isinstance(sim, WarehouseSim):
+        raise TypeError(
+            f"expected a WarehouseSim or a rtaw_marl warehouse env, got {type(source).__name__}"
+        )
+    return sim
