@@ -26,7 +26,7 @@ demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
 	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
 		frames=40960 eval.every_frames=20480 output_dir=$(DEMO_RUN)
-	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,rtaw,checkpoint] \
+	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
 		pretrained=shelves_astar_m10_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
 

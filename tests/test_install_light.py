@@ -116,9 +116,9 @@ def test_command_without_its_extra_fails_with_one_line(
 
 
 def test_eval_of_a_trained_policy_without_torch_fails_with_one_line(tmp_path: Path) -> None:
-    """Baselines need only the ``cli`` extra; ``policy=rtaw`` names the ``train`` extra."""
+    """Baselines need only the ``cli`` extra; ``policy=pretrained`` names the ``train`` extra."""
     body = """
-    sys.argv = ["rtaw-eval", "scenario=poc", "policy=[rtaw]", "pretrained=shelves_astar_m10",
+    sys.argv = ["rtaw-eval", "scenario=poc", "policy=[pretrained]", "pretrained=shelves_astar_m10",
                 "seeds=[0]", "progress=false"]
     import rtaw_marl.cli
     rtaw_marl.cli.eval_main()
@@ -126,7 +126,9 @@ def test_eval_of_a_trained_policy_without_torch_fails_with_one_line(tmp_path: Pa
     proc = _blocked(("torch", "tensordict", "torchrl"), body, tmp_path)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.count("\n") == 1, proc.stderr
-    assert "error: policy=rtaw needs the training extra ('torch' is not installed)" in proc.stderr
+    assert "error: policy=pretrained needs the training extra ('torch' is not installed)" in (
+        proc.stderr
+    )
     assert "pip install 'rtaw_marl[train]'" in proc.stderr
 
 
@@ -195,7 +197,7 @@ def test_env_only_install_in_a_fresh_venv(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "22.74" in proc.stdout
     assert "18.46" in proc.stdout
-    proc = run(bindir / "rtaw-eval", "scenario=poc", "policy=[rtaw]",
+    proc = run(bindir / "rtaw-eval", "scenario=poc", "policy=[pretrained]",
                "pretrained=shelves_astar_m10", "seeds=[0]", "progress=false")  # fmt: skip
     assert proc.returncode == 2, proc.stderr
     assert "pip install 'rtaw_marl[train]'" in proc.stderr

@@ -8,7 +8,7 @@ only the standard library.
 What each command needs:
 
 * ``rtaw-eval`` and ``rtaw-render``: the ``cli`` extra (Hydra, tqdm, matplotlib); the
-  trained policies (``policy=rtaw``, ``policy=checkpoint``) also need the ``train`` extra.
+  trained policies (``policy=pretrained``, ``policy=checkpoint``) also need the ``train`` extra.
 * ``rtaw-train`` and ``rtaw-study``: the ``train`` extra (the ``cli`` extra plus torch,
   tensordict, torchrl).
 """
@@ -63,7 +63,7 @@ def _run(command: str) -> None:
     try:
         importlib.import_module(f"rtaw_marl.cli.{command}").main()
     except ModuleNotFoundError as exc:
-        # A module of an extra imported only for some options (torch for policy=rtaw).
+        # A module of an extra imported only for some options (torch for policy=pretrained).
         root = (exc.name or "").partition(".")[0]
         for name, provided in EXTRAS.items():
             if root in provided:

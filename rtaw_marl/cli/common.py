@@ -25,7 +25,14 @@ from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["SweepFailures", "exit_on_user_error", "hydra_entry", "policies_from_cfg", "typed"]
+__all__ = [
+    "SweepFailures",
+    "exit_on_user_error",
+    "hydra_entry",
+    "policies_from_cfg",
+    "policy_names",
+    "typed",
+]
 
 
 def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable[[], None]:
@@ -140,15 +147,34 @@ def typed(cfg: DictConfig | Any) -> Any:
     return to_typed(cfg) if isinstance(cfg, DictConfig) else cfg
 
 
+#: The old name of ``policy=pretrained``; still accepted, with a one-line warning.
+_OLD_PRETRAINED = "rtaw"
+
+
+def policy_names(names: list[str]) -> list[str]:
+    """``names`` with the deprecated ``rtaw`` spelled ``pretrained`` (one warning line:
+    ``rtaw`` is also the package and the paper's network, ``model=rtaw``)."""
+    if _OLD_PRETRAINED not in names:
+        return names
+    print(
+        "warning: policy=rtaw is deprecated, use policy=pretrained (a shipped policy "
+        "named by pretrained=...)",
+        file=sys.stderr,
+    )
+    return ["pretrained" if n == _OLD_PRETRAINED else n for n in names]
+
+
 def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
     """Policies by name: baselines, ``checkpoint`` (one greedy policy per path in
-    ``cfg.checkpoint``) and ``rtaw`` (one per shipped policy named in ``cfg.pretrained``)."""
-    sources = {"checkpoint": as_list(cfg.checkpoint), "rtaw": as_list(cfg.pretrained)}
-    for option, key in (("checkpoint", "checkpoint"), ("rtaw", "pretrained")):
+    ``cfg.checkpoint``) and ``pretrained`` (one per shipped policy named in
+    ``cfg.pretrained``; ``rtaw`` is its deprecated name)."""
+    names = policy_names(names)
+    sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}
+    for option in sources:
         if option in names and not sources[option]:
-            raise ConfigError(f"policy={option} needs {key}=... (one value or a list)")
+            raise ConfigError(f"policy={option} needs {option}=... (one value or a list)")
         if sources[option] and option not in names:
-            raise ConfigError(f"{key}=... given but policy does not include '{option}'")
+            raise ConfigError(f"{option}=... given but policy does not include '{option}'")
     policies: dict[str, SimPolicy] = {}
     for name in names:
         if name not in sources:

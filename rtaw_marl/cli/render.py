@@ -6,7 +6,7 @@ paths, queued tasks, tasks on their way to pickup, carried tasks and their desti
 
 Examples::
 
-    rtaw-render layout=A policy=rtaw pretrained=A_astar_m10 output=episode.gif
+    rtaw-render layout=A policy=pretrained pretrained=A_astar_m10 output=episode.gif
     rtaw-render navigator=cbs env.num_tasks=20 every=2 fps=12
 """
 

@@ -22,10 +22,10 @@ class EvalConfig(SimGroups):
     Attributes:
         policy: Policies to evaluate, by name (one or a list): ``mpdm``, ``rbts``,
             ``random``, ``lookahead``, ``hungarian``, ``hindsight`` (a reference that
-            knows the future), ``checkpoint`` (trained files) and ``rtaw`` (shipped
-            policies).
+            knows the future), ``checkpoint`` (trained files) and ``pretrained`` (shipped
+            policies; ``rtaw`` is its deprecated name).
         checkpoint: Checkpoint path(s) evaluated when ``policy`` includes ``checkpoint``.
-        pretrained: Shipped policy name(s) evaluated when ``policy`` includes ``rtaw``.
+        pretrained: Shipped policy name(s) evaluated when ``policy`` includes ``pretrained``.
         seeds: Episode seeds; every policy sees the same tasks for the same seed.
         compare_to: A policy name (among ``policy``'s) every other policy is also
             compared with, besides MPDM: a paired TTD difference with its interval.
@@ -70,9 +70,10 @@ class RenderConfig(SimGroups):
     """An ``rtaw-render`` run: one episode of one policy, saved as an animated GIF.
 
     Attributes:
-        policy: One policy: ``mpdm``, ``rbts``, ``random``, ``checkpoint`` or ``rtaw``.
+        policy: One policy: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``,
+            ``checkpoint`` or ``pretrained``.
         checkpoint: The checkpoint path when ``policy=checkpoint``.
-        pretrained: The shipped policy name when ``policy=rtaw``.
+        pretrained: The shipped policy name when ``policy=pretrained``.
         seed: Episode seed.
         output: The GIF; ``None`` means ``episode.gif`` in the Hydra run folder.
         fps: Frames per second.

@@ -337,7 +337,7 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     assert (cfg.layout.preset, cfg.navigator.name) == ("D", "astar")
     assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10_long"]
     assert cfg.env.episode_mode == "paper"
-    assert list(cfg.policy) == ["mpdm", "rbts", "lookahead", "hungarian", "hindsight", "rtaw"]
+    assert list(cfg.policy) == ["mpdm", "rbts", "lookahead", "hungarian", "hindsight", "pretrained"]
     assert list(cfg.seeds) == list(range(20))
 
 
@@ -391,3 +391,19 @@ def test_every_rule_runs_everywhere(overrides: list[str], cli, tmp_path: Path) -
     data = json.loads(out.read_text())
     assert set(data["policies"]) == {"mpdm", "rbts", "lookahead", "hungarian", "hindsight"}
     assert "hindsight (reference: knows the future)" in result.out
+
+
+def test_the_old_name_of_pretrained_still_works_with_one_warning(tmp_path: Path, cli) -> None:
+    """policy=rtaw (the package's and the paper network's name too) is policy=pretrained."""
+    out = {name: tmp_path / f"{name}.json" for name in ("rtaw", "pretrained")}
+    for name, path in out.items():
+        result = cli(
+            "eval", "scenario=poc", f"policy=[mpdm,{name}]", "pretrained=shelves_astar_m10_plus",
+            "seeds=[0]", "progress=false", f"output={path}",
+        )  # fmt: skip
+        assert result.code == 0, result.err
+        warned = "warning: policy=rtaw is deprecated, use policy=pretrained" in result.err
+        assert warned == (name == "rtaw")
+    old, new = (json.loads(p.read_text())["policies"] for p in out.values())
+    assert old.keys() == new.keys()
+    assert [v["ttd"] for v in old.values()] == [v["ttd"] for v in new.values()]

@@ -20,7 +20,7 @@ def test_render_writes_a_checked_gif(navigator: str, tmp_path: Path) -> None:
     """A short episode on layout A with the shipped policy: one frame per second."""
     out = tmp_path / "episode.gif"
     overrides = [
-        f"navigator={navigator}", "layout=A", "env.num_tasks=6", "policy=rtaw",
+        f"navigator={navigator}", "layout=A", "env.num_tasks=6", "policy=pretrained",
         "pretrained=A_astar_m10", f"output={out}", "every=2",
     ]  # fmt: skip
     cfg = compose(config_name="render", overrides=overrides)
