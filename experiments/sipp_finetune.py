@@ -5,33 +5,40 @@ Usage::
     python experiments/sipp_finetune.py --jobs 2            # train, then evaluate
     python experiments/sipp_finetune.py --eval-only         # evaluate the runs there
 
-For each layout A-E, continues the best checkpoint of the shipped 10-robot RTAW+ run
-(``runs/pretrained/<p>_astar_m10_plus``, trained with A*: train it first with
-``train_pretrained.py``) with SIPP execution on the navigation table's setting (10 robots,
-50 designated tasks, no completion noise) for ``--frames`` more PPO frames
-(``resume_new_scenario=true``), selected on seeds 1000-1009, into
-``runs/sipp_finetune/<p>``. Then evaluates each best checkpoint on the table's SIPP and
-CBS rows (seeds 0-19) and pairs it per seed with the stored navigation table
-(``docs/data/navigators.json``: the A*-trained RTAW+ and the rules). Prints one markdown
-row per layout and navigator plus pooled lines; per-seed TTDs go to
+For each layout A-E, continues the best checkpoint of the zoo's 10-robot RTAW+ run
+(``runs/pretrained/<p>_astar_m10_plus``, trained with A*: ``rtaw-zoo <p>_astar_m10_plus``
+first) with SIPP execution on the navigation table's setting (10 robots, 50 designated
+tasks, no completion noise) for ``--frames`` more PPO frames
+(:func:`rtaw_marl.training.variants.sipp_finetune_command`), selected on seeds
+1000-1009, into ``runs/sipp_finetune/<p>``. Then evaluates each best checkpoint on the
+``navigators`` study's SIPP and CBS rows (seeds 0-19) and pairs it per seed with the
+stored table (``docs/data/navigators.json``: the A*-trained RTAW+ and the rules). Prints
+one markdown row per layout and navigator plus pooled lines; per-seed TTDs go to
 ``docs/data/sipp_finetune.json``.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
-import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from paper_tables import vs
-
-from rtaw_marl.evaluation import evaluate
+from rtaw_marl.evaluation.report import markdown_table
+from rtaw_marl.evaluation.studies import STUDIES
+from rtaw_marl.evaluation.study import (
+    Study,
+    StudyResult,
+    checkpoint,
+    load_result,
+    run_study,
+)
+from rtaw_marl.evaluation.tables import vs
 from rtaw_marl.models.checkpoint import load_checkpoint
-from rtaw_marl.policies.network import load_policy
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.training.variants import run_logged, sipp_finetune_command
+from rtaw_marl.training.zoo import RUNS as ZOO_RUNS
 from rtaw_marl.utils.atomic import atomic_write
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,64 +47,52 @@ RUNS = ROOT / "runs" / "sipp_finetune"
 SEEDS = list(range(20))
 LAYOUTS = "ABCDE"
 NAVIGATORS = ("sipp", "cbs")
-#: The navigation table's setting (experiments/paper_tables.py ``navigators``).
-ENV = {"num_robots": 10, "num_tasks": 50, "queue_len": 10, "noise_mean": 0.0, "noise_var": 0.0}
-
-
-def command(layout: str, frames: int) -> list[str]:
-    """The rtaw-train command continuing layout ``layout``'s A*-trained RTAW+ with SIPP."""
-    base = ROOT / "runs" / "pretrained" / f"{layout}_astar_m10_plus" / "checkpoints" / "best.pt"
-    start = int(load_checkpoint(base)["frames"])
-    exe = str(Path(sys.executable).with_name("rtaw-train"))
-    return [
-        exe, f"layout={layout}", "navigator=sipp",
-        *(f"env.{k}={v}" for k, v in ENV.items()), "model=rtaw_plus", "algo=ppo",
-        f"frames={start + frames}", "eval.every_frames=20480",
-        "eval.seeds=[1000,1001,1002,1003,1004,1005,1006,1007,1008,1009]", "seed=0",
-        f"resume={base}", "resume_new_scenario=true", f"output_dir={RUNS / layout}",
-        "progress=false",
-    ]  # fmt: skip
+BASELINES = ("RTAW+", "MPDM", "RBTS", "lookahead")
 
 
 def train(layout: str, frames: int) -> str:
-    """Run :func:`command` for ``layout`` (its log in ``runs/sipp_finetune/<p>.log``)."""
-    RUNS.mkdir(parents=True, exist_ok=True)
-    with (RUNS / f"{layout}.log").open("w") as log:
-        subprocess.run(command(layout, frames), check=True, cwd=ROOT, stdout=log,
-                       stderr=subprocess.STDOUT)  # fmt: skip
-    best = load_checkpoint(RUNS / layout / "checkpoints" / "best.pt")
-    return f"{layout}: best selection TTD {best['eval']['ttd']:.1f} at {best['frames']} frames"
+    """Fine-tune ``layout``'s RTAW+ (its log in ``runs/sipp_finetune/<p>.log``)."""
+    base = ROOT / ZOO_RUNS / f"{layout}_astar_m10_plus" / "checkpoints" / "best.pt"
+    start = int(load_checkpoint(base)["frames"])
+    cmd = sipp_finetune_command(layout, frames, RUNS / layout, start, ROOT / ZOO_RUNS)
+    run_logged(cmd, RUNS / f"{layout}.log")
+    ckpt = load_checkpoint(best(layout))
+    return f"{layout}: best selection TTD {ckpt['eval']['ttd']:.1f} at {ckpt['frames']} frames"
 
 
-def report() -> None:
-    """Evaluate every fine-tuned policy on the SIPP and CBS rows; print and store."""
-    table = json.loads((DATA / "navigators.json").read_text())
-    if table["seeds"] != SEEDS:
-        raise SystemExit("error: navigators.json holds other seeds; regenerate that table")
-    print("| setting | fine-tuned vs A*-trained RTAW+ | vs MPDM | vs RBTS | vs lookahead |")
-    print("|---|---|---|---|---|")
-    out: dict[str, list[float]] = {}
-    pooled: dict[str, dict[str, list[float]]] = {}
+def best(layout: str) -> Path:
+    """The fine-tuned run's best checkpoint of preset ``layout``."""
+    return RUNS / layout / "checkpoints" / "best.pt"
+
+
+def evaluate_tuned() -> StudyResult:
+    """The fine-tuned policies on the navigators study's SIPP and CBS cells."""
+    cells = [
+        dataclasses.replace(c, policies={"tuned": checkpoint(best(c.key.split(", ")[0]))})
+        for c in STUDIES["navigators"].cells(SEEDS)
+        if c.key.split(", ")[1] in NAVIGATORS
+    ]
+    study = Study(name="sipp_finetune", description="", cells=lambda _: cells,
+                  render=lambda r, _: "", page=None, store=False)  # fmt: skip
+    return run_study(study, SEEDS, RUNS / "eval")
+
+
+def report(result: StudyResult) -> str:
+    """Rows per layout and navigator against the stored table, then pooled lines."""
+    table = load_result(DATA / "navigators.json")
+    if table is None or table.seeds != SEEDS:
+        raise SystemExit("error: navigators.json is missing or holds other seeds")
+    rows = {k: {**table.ttd[k], **v} for k, v in result.ttd.items()}
+    head = ["setting", "fine-tuned vs A*-trained RTAW+", *(f"vs {b}" for b in BASELINES[1:])]
+    body = [[k, *(vs(t[b], t["tuned"]) for b in BASELINES)] for k, t in rows.items()]
+    lines = []
     for nav in NAVIGATORS:
-        for p in LAYOUTS:
-            layout = {"name": "preset", "preset": p, "width": 60, "height": 60}
-            sim = SimSpec.of({**ENV}, layout, nav, "designated").build()
-            policy = load_policy(RUNS / p / "checkpoints" / "best.pt", name="tuned")
-            ttd = evaluate(sim, {"tuned": policy}, SEEDS)["tuned"]["ttd"]
-            row = table["rows"][f"{p}, {nav}"]
-            out[f"{p}, {nav}"] = ttd
-            acc = pooled.setdefault(nav, {})
-            for label in ("RTAW+", "MPDM", "RBTS", "lookahead"):
-                acc.setdefault(label, []).extend(row[label])
-            acc.setdefault("tuned", []).extend(ttd)
-            cells = " | ".join(vs(row[b], ttd) for b in ("RTAW+", "MPDM", "RBTS", "lookahead"))
-            print(f"| {p}, {nav} | {cells} |", flush=True)
-    for nav, acc in pooled.items():
-        cells = "; ".join(f"vs {b} {vs(acc[b], acc['tuned'])}"
-                          for b in ("RTAW+", "MPDM", "RBTS", "lookahead"))  # fmt: skip
-        print(f"- {nav}, pooled over A-E: fine-tuned {cells} (n={len(acc['tuned'])})")
-    text = json.dumps({"seeds": SEEDS, "rows": out}, indent=1) + "\n"
-    atomic_write(DATA / "sipp_finetune.json", lambda fh: fh.write(text.encode()))
+        # Pooled as one paired sample: every layout's seeds together.
+        mine = [t for k, t in rows.items() if k.endswith(f", {nav}")]
+        acc = {label: [x for t in mine for x in t[label]] for label in (*BASELINES, "tuned")}
+        cells = "; ".join(f"vs {b} {vs(acc[b], acc['tuned'])}" for b in BASELINES)
+        lines.append(f"- {nav}, pooled over A-E: fine-tuned {cells} (n={len(acc['tuned'])})")
+    return markdown_table(head, body) + "\n\n" + "\n".join(lines)
 
 
 def main() -> int:
@@ -110,7 +105,11 @@ def main() -> int:
         with ThreadPoolExecutor(max_workers=args.jobs) as pool:
             for line in pool.map(lambda p: train(p, args.frames), LAYOUTS):
                 print(line, flush=True)
-    report()
+    result = evaluate_tuned()
+    print(report(result))
+    rows = {key: ttd["tuned"] for key, ttd in result.ttd.items()}
+    text = json.dumps({"seeds": SEEDS, "rows": rows}, indent=1) + "\n"
+    atomic_write(DATA / "sipp_finetune.json", lambda fh: fh.write(text.encode()))
     return 0
 
 

@@ -20,7 +20,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-import torch
+from rtaw_marl.models.checkpoint import load_checkpoint
+from rtaw_marl.training.zoo import rtaw_train
 
 ROOT = Path(__file__).resolve().parents[1]
 RUNS = ROOT / "runs" / "curves"
@@ -43,11 +44,10 @@ def run(name: str) -> dict:
     out = RUNS / name
     last = out / "checkpoints" / "last.pt"
     if not last.is_file():
-        exe = Path(sys.executable).with_name("rtaw-train")
-        cmd = [str(exe), *CONFIGS[name], f"output_dir={out}", "progress=false"]
+        cmd = [rtaw_train(), *CONFIGS[name], f"output_dir={out}", "progress=false"]
         print(" ".join(cmd), flush=True)
         subprocess.run(cmd, check=True, cwd=ROOT)
-    ckpt = torch.load(last, map_location="cpu", weights_only=True)
+    ckpt = load_checkpoint(last)
     return {"overrides": CONFIGS[name], "history": ckpt["history"]}
 
 

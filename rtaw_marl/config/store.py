@@ -19,10 +19,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, StudyConfig
 from rtaw_marl.models.config import MODELS
-from rtaw_marl.policies.pretrained.registry import CONTINUED, PRETRAINED
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
+from rtaw_marl.training.zoo import ZOO
 
 __all__ = ["GROUPS", "register_configs"]
 
@@ -67,15 +67,17 @@ def register_configs() -> None:
             store.store(group=f"schema/{group}", name=name, node=_node(schema))
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
-    # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes as one sweep.
-    # Continued entries are left out: they resume a copy of their base's run folder.
-    for name in (n for n in PRETRAINED if n not in CONTINUED):
-        store.store(group="zoo", name=name, node=_zoo_node(PRETRAINED[name]), package="_global_")
+    # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes
+    # (rtaw_marl.training.zoo) as one sweep. Continued entries are left out: they resume
+    # a copy of their base's run folder.
+    for recipe in (r for r in ZOO.values() if r.stage != "continued"):
+        node = _zoo_node(recipe.overrides())
+        store.store(group="zoo", name=recipe.name, node=node, package="_global_")
     _registered = True
 
 
 def _zoo_node(overrides: list[str]) -> dict[str, Any]:
-    """A registry entry's ``rtaw-train`` overrides as a ``zoo`` option: its option
+    """A zoo recipe's ``rtaw-train`` overrides as a ``zoo`` option: its option
     choices (``layout=A``) become ``override /layout`` entries of a defaults list, its
     values (``env.num_robots=10``) a nested dict."""
     defaults: list[Any] = []

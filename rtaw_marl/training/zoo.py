@@ -1,0 +1,210 @@
+"""The recipes of the shipped policies (the zoo): how each ``<name>.pt`` was trained.
+
+Each :class:`Recipe` names its scenario (a :data:`~rtaw_marl.scenarios.SCENARIOS`
+name, with the simulator keys it changes), its network, its PPO budget and, for a
+staged entry, the entry whose run it continues. :meth:`Recipe.overrides` is the exact
+``rtaw-train`` command line every shipped checkpoint records (``tests/training/
+test_zoo.py`` checks each ``.pt`` against it), :func:`train_command` the whole command.
+``rtaw-zoo`` (:mod:`rtaw_marl.cli.zoo`, run by :mod:`rtaw_marl.training.retrain`)
+retrains entries into ``runs/pretrained/<name>`` and ships their best checkpoints.
+
+Three kinds of entries (:attr:`Recipe.stage`):
+
+* ``train``: from scratch. The paper's network (``<scenario>``) and RTAW+
+  (``<scenario>_plus``) get the same recipe and budget (docs/training.md): a warm start
+  imitating ``lookahead`` (65,536 labelled decisions, DAgger), then :data:`BUDGET` PPO
+  frames.
+* ``continued``: Table I's policies at three times the budget (``<scenario>_long``,
+  ``<scenario>_long_plus``): the base run continued from its ``last.pt`` to
+  :data:`LONG_FRAMES` with the same recipe, in a copy of its folder.
+* ``curriculum``: Table II's 500-robot RTAW+: the best checkpoint of the 100-robot
+  RTAW+ run continued with 500 robots and 2,500-task episodes for
+  :data:`CURRICULUM_FRAMES` more PPO frames (``frames=`` counts from that checkpoint),
+  selected on seeds 1000-1004.
+
+Policies trained with 10 robots also run with 100 or 1000: the networks' sizes do not
+depend on them. This module is plain Python (no torch, no Hydra).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from rtaw_marl.errors import unknown_name
+from rtaw_marl.scenarios import SCENARIOS, TABLE1_ROBOTS, Scenario
+
+__all__ = [
+    "BUDGET",
+    "CURRICULUM_FRAMES",
+    "LONG_FRAMES",
+    "RUNS",
+    "STAGES",
+    "ZOO",
+    "Recipe",
+    "recipe",
+    "rtaw_train",
+    "train_command",
+]
+
+#: Where ``rtaw-zoo`` trains (relative to the working directory): one folder per entry.
+RUNS = Path("runs/pretrained")
+#: PPO frames of a ``train`` entry, after its warm start.
+BUDGET = 409_600
+#: A ``continued`` entry's budget: three times :data:`BUDGET`.
+LONG_FRAMES = 3 * BUDGET
+#: PPO frames a ``curriculum`` entry adds to its base's best checkpoint.
+CURRICULUM_FRAMES = 163_840
+#: Evaluations for checkpoint selection, every so many PPO frames.
+EVERY_FRAMES = 40_960
+#: The warm start of ``train`` entries (and of their continuations).
+WARM_START = ("imitation.teacher=lookahead", "imitation.frames=65536")
+#: A curriculum's selection seeds (fewer than the default ten: 500-robot episodes).
+CURRICULUM_SEEDS = (1000, 1001, 1002, 1003, 1004)
+#: Overrides the zoo's commands never spelled out: the default task stream.
+UNSPELLED = frozenset({"tasks=designated"})
+#: Table II's 100-robot scenarios: their policies and the bases of its curricula.
+TABLE2_BASES = ("open300_direct_m100_random", "C256_astar_m100_random")
+#: The kinds of entries.
+STAGES = ("train", "continued", "curriculum")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Recipe:
+    """How one shipped policy is trained.
+
+    Attributes:
+        name: The shipped name (``rtaw_marl/policies/pretrained/<name>.pt``).
+        scenario: Its :data:`~rtaw_marl.scenarios.SCENARIOS` name.
+        env: Simulator keys it changes on that scenario (a curriculum's 500 robots).
+        model: ``rtaw`` (the paper's network) or ``rtaw_plus``.
+        frames: PPO frames: the run's budget (``train``, ``continued``), or what it adds
+            to its base's best checkpoint (``curriculum``).
+        stage: ``train``, ``continued`` or ``curriculum`` (see the module docstring).
+        base: The entry whose run it continues (staged entries).
+        base_frames: A curriculum's base: its best checkpoint's PPO frames.
+        seed: The training seed.
+    """
+
+    name: str
+    scenario: str
+    env: Mapping[str, Any] = field(default_factory=dict)
+    model: str = "rtaw"
+    frames: int = BUDGET
+    stage: str = "train"
+    base: str | None = None
+    base_frames: int = 0
+    seed: int = 0
+
+    def setting(self) -> Scenario:
+        """The scenario it trains on (with :attr:`env`'s changes)."""
+        return SCENARIOS[self.scenario].with_env(**self.env)
+
+    def scenario_overrides(self) -> list[str]:
+        """The scenario's ``rtaw-train`` overrides, as the zoo's commands spell them."""
+        return [o for o in self.setting().overrides() if o not in UNSPELLED]
+
+    @property
+    def budget(self) -> int:
+        """The run's ``frames=`` value (a curriculum counts from its base's best)."""
+        return self.base_frames + self.frames if self.stage == "curriculum" else self.frames
+
+    def overrides(self, runs: Path = RUNS) -> list[str]:
+        """The ``rtaw-train`` overrides of this entry (besides its run folder, and a
+        continued entry's ``resume=``); a curriculum continues
+        ``<runs>/<base>/checkpoints/best.pt``."""
+        if self.stage == "curriculum":
+            return self.continuing(f"{runs / str(self.base)}/checkpoints/best.pt", self.base_frames)
+        return [
+            *self.scenario_overrides(), f"model={self.model}", "algo=ppo", *WARM_START,
+            f"frames={self.budget}", f"eval.every_frames={EVERY_FRAMES}", f"seed={self.seed}",
+        ]  # fmt: skip
+
+    def continuing(self, checkpoint: str, start_frames: int) -> list[str]:
+        """A curriculum's overrides continuing ``checkpoint`` (a run of its base's
+        scenario after ``start_frames`` PPO frames; another seed's, say) for
+        :attr:`frames` more frames on this entry's scenario."""
+        seeds = ",".join(map(str, CURRICULUM_SEEDS))
+        return [
+            *self.scenario_overrides(), f"model={self.model}", "algo=ppo",
+            f"frames={start_frames + self.frames}", f"eval.every_frames={EVERY_FRAMES}",
+            f"eval.seeds=[{seeds}]", f"seed={self.seed}",
+            f"resume={checkpoint}", "resume_new_scenario=true",
+        ]  # fmt: skip
+
+
+def _recipes() -> list[Recipe]:
+    table1 = [
+        s
+        for m in TABLE1_ROBOTS
+        for s in (f"open60_direct_m{m}", *(f"{p}_astar_m{m}" for p in "ABCDE"))
+    ]
+    # The default warehouse's policies (the demo's): its commands spell the 10 robots.
+    trained = [("shelves_astar_m10", "default", {"num_robots": 10})]
+    trained += [(name, name, {}) for name in (*table1, *TABLE2_BASES)]
+    out = [Recipe(name=n, scenario=s, env=env) for n, s, env in trained]
+    out += [
+        Recipe(name=f"{n}_plus", scenario=s, env=env, model="rtaw_plus") for n, s, env in trained
+    ]
+    for base, base_frames in zip(TABLE2_BASES, (368_640, 409_600), strict=True):
+        out.append(
+            Recipe(
+                name=base.replace("_m100_", "_m500_") + "_plus", scenario=base,
+                env={"num_robots": 500, "num_tasks": 2500}, model="rtaw_plus",
+                frames=CURRICULUM_FRAMES, stage="curriculum", base=f"{base}_plus",
+                base_frames=base_frames,
+            )
+        )  # fmt: skip
+    for name in table1:
+        for plus, model in (("", "rtaw"), ("_plus", "rtaw_plus")):
+            out.append(
+                Recipe(
+                    name=f"{name}_long{plus}", scenario=name, model=model, frames=LONG_FRAMES,
+                    stage="continued", base=f"{name}{plus}",
+                )
+            )  # fmt: skip
+    return out
+
+
+#: Every shipped policy's recipe, by name: ``train`` entries first, then the staged ones
+#: (which continue them).
+ZOO: Mapping[str, Recipe] = MappingProxyType({r.name: r for r in _recipes()})
+
+
+def recipe(name: str) -> Recipe:
+    """The recipe of shipped policy ``name``.
+
+    Raises:
+        ConfigError: Unknown name; the message lists the zoo.
+    """
+    try:
+        return ZOO[name]
+    except KeyError:
+        raise unknown_name("zoo entry", name, list(ZOO)) from None
+
+
+def rtaw_train() -> str:
+    """The ``rtaw-train`` executable beside this Python interpreter."""
+    return str(Path(sys.executable).with_name("rtaw-train"))
+
+
+def train_command(name: str, run_dir: Path, runs: Path = RUNS) -> list[str]:
+    """The command that trains entry ``name`` into ``run_dir``: what its checkpoint
+    records (a continued entry resumes ``run_dir``, a copy of its base's run).
+
+    Raises:
+        ConfigError: Unknown name.
+    """
+    entry = recipe(name)
+    resume = [f"resume={run_dir}/checkpoints/last.pt"] if entry.stage == "continued" else []
+    return [
+        rtaw_train(),
+        *entry.overrides(runs),
+        *resume,
+        f"output_dir={run_dir}",
+        "progress=false",
+    ]

@@ -1,0 +1,135 @@
+"""The zoo's recipes: each shipped checkpoint records its recipe's command, the recipes
+train on their named scenarios, ``+zoo=NAME`` is the recipe, and ``rtaw-zoo`` runs them."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+from rtaw_marl.config import as_plain, compose, to_typed
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.models.checkpoint import load_checkpoint
+from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
+from rtaw_marl.scenarios import SCENARIOS
+from rtaw_marl.training.checkpoints import scenario_changes
+from rtaw_marl.training.zoo import (
+    BUDGET,
+    CURRICULUM_FRAMES,
+    LONG_FRAMES,
+    STAGES,
+    ZOO,
+    recipe,
+    train_command,
+)
+
+STAGED = sorted(n for n, r in ZOO.items() if r.stage != "train")
+
+
+def test_the_zoo_is_every_shipped_name_and_names_real_scenarios() -> None:
+    assert list(ZOO) == list(PRETRAINED)
+    for name, entry in ZOO.items():
+        assert entry.name == name
+        assert entry.scenario in SCENARIOS
+        assert entry.stage in STAGES
+        assert entry.model == ("rtaw_plus" if name.endswith("_plus") else "rtaw")
+        assert (entry.base is None) == (entry.stage == "train")
+        assert entry.base is None or ZOO[entry.base].stage == "train"
+    with pytest.raises(ConfigError, match="available: A_astar_m10"):
+        recipe("nope")
+
+
+@pytest.mark.parametrize("name", sorted(ZOO))
+def test_each_shipped_checkpoint_records_its_recipe(name: str) -> None:
+    """The recorded command is the recipe's, so the policy can be retrained exactly."""
+    ckpt = load_checkpoint(pretrained_path(name))
+    overrides = ZOO[name].overrides()
+    assert ckpt["command"][1 : 1 + len(overrides)] == overrides
+    assert f"frames={ZOO[name].budget}" in ckpt["command"]
+
+
+@pytest.mark.parametrize("name", sorted(ZOO))
+def test_each_recipe_trains_on_its_scenario(name: str) -> None:
+    """The command's spelling (the default tasks left out) composes the named scenario,
+    as ``rtaw-train scenario=NAME`` and Python build it."""
+    entry = ZOO[name]
+    spelled = to_typed(compose("train", entry.scenario_overrides())).sim_spec()
+    assert spelled == entry.setting().spec()
+    env = [f"env.{k}={v}" for k, v in entry.env.items()]
+    assert to_typed(compose("train", [f"scenario={entry.scenario}", *env])).sim_spec() == spelled
+
+
+@pytest.mark.parametrize("name", [n for n in STAGED if ZOO[n].stage == "curriculum"])
+def test_curriculum_policies_continue_their_base_with_500_robots(name: str) -> None:
+    """Table II's RTAW+ continues the shipped 100-robot policy (its frame count) with 500
+    robots, selected on seeds 1000+ of the 500-robot scenario."""
+    entry = ZOO[name]
+    assert load_checkpoint(pretrained_path(entry.base))["frames"] == entry.base_frames
+    ckpt = load_checkpoint(pretrained_path(name))
+    assert ckpt["config"]["env"]["num_robots"] == 500
+    assert ckpt["config"]["resume"] == f"runs/pretrained/{entry.base}/checkpoints/best.pt"
+    assert entry.base_frames < ckpt["frames"] <= ckpt["config"]["frames"] == entry.budget
+    assert entry.budget == entry.base_frames + CURRICULUM_FRAMES
+    assert min(ckpt["config"]["eval"]["seeds"]) >= 1000
+
+
+@pytest.mark.parametrize("name", [n for n in STAGED if ZOO[n].stage == "continued"])
+def test_continued_policies_extend_their_base_run(name: str) -> None:
+    """Table I's policies at three times the budget are the shipped base's own run,
+    continued from its last checkpoint in a copy of its folder, same scenario and recipe."""
+    base = load_checkpoint(pretrained_path(ZOO[name].base))
+    ckpt = load_checkpoint(pretrained_path(name))
+    command = ckpt["command"]
+    run_dir = next(c for c in command if c.startswith("output_dir=")).split("=", 1)[1]
+    assert f"resume={run_dir}/checkpoints/last.pt" in command
+    assert f"frames={LONG_FRAMES}" in command
+    assert base["config"]["frames"] == BUDGET
+    assert LONG_FRAMES == 3 * BUDGET
+    # The same run: its selection history starts with the base's, up to the base's best.
+    assert ckpt["history"][: len(base["history"])] == base["history"]
+    assert ckpt["history"][-1]["frames"] >= ckpt["frames"] >= base["frames"]
+    if ckpt["frames"] == base["frames"]:  # no later evaluation beat the base's best
+        actor = base["model"]["actor"]
+        assert ckpt["model"]["actor"].keys() == actor.keys()
+        assert all(torch.equal(v, actor[k]) for k, v in ckpt["model"]["actor"].items())
+    else:  # a checkpoint of the continuation itself
+        assert ckpt["config"]["frames"] == LONG_FRAMES
+    assert scenario_changes(base["config"], ckpt["config"]) == []
+    for key in ("model", "algo", "imitation", "seed"):
+        assert ckpt["config"][key] == base["config"][key]
+
+
+def test_every_zoo_option_is_its_recipe() -> None:
+    """``+zoo=NAME`` composes exactly the recipe's overrides; continued entries are no
+    zoo option (they resume a copy of their base's folder)."""
+    for name, entry in ZOO.items():
+        if entry.stage == "continued":
+            with pytest.raises(ConfigError, match=name):
+                compose("train", [f"+zoo={name}"])
+            continue
+        assert as_plain(to_typed(compose("train", [f"+zoo={name}"]))) == as_plain(
+            to_typed(compose("train", entry.overrides()))
+        ), name
+
+
+def test_train_command_trains_into_the_run_folder(tmp_path: Path) -> None:
+    cmd = train_command("A_astar_m10_long_plus", tmp_path / "x")
+    assert cmd[0].endswith("rtaw-train")
+    cfg = to_typed(compose("train", cmd[1:]))
+    assert (cfg.output_dir, cfg.resume) == (
+        str(tmp_path / "x"),
+        f"{tmp_path / 'x'}/checkpoints/last.pt",
+    )
+    assert (cfg.frames, cfg.model.name, cfg.progress) == (LONG_FRAMES, "rtaw_plus", False)
+    curriculum = train_command("C256_astar_m500_random_plus", tmp_path / "c", tmp_path / "runs")
+    resume = f"resume={tmp_path / 'runs'}/C256_astar_m100_random_plus/checkpoints/best.pt"
+    assert resume in curriculum
+
+
+def test_the_zoo_module_imports_no_torch() -> None:
+    code = "import sys, rtaw_marl.training.zoo; print('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
