@@ -13,6 +13,7 @@ import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 
 from rtaw_marl.errors import unknown_name
+from rtaw_marl.evaluation.analysis import ANALYSIS
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.evaluation.study import Cell, PolicyRef, Study, StudyResult, learned, rule
 from rtaw_marl.evaluation.tables import (
@@ -301,6 +302,7 @@ STUDIES: dict[str, Study] = {
         Study(name="lookahead_horizon", description="lookahead's horizon, selection seeds",
               cells=_horizon_cells, render=_horizons, store=True,
               default_seeds=tuple(range(1000, 1020))),
+        ANALYSIS,
     )
 }  # fmt: skip
 
