@@ -164,10 +164,13 @@ def run(
 
 
 def render(result: StudyResult, _: object = None) -> str:
-    """The generated section of docs/analysis.md (``Study.render``)."""
+    """The generated section of docs/analysis.md (``Study.render``); a result without
+    :func:`run`'s ``extra`` (TTDs only) gives empty tables."""
     x = result.extra
-    summaries = [Summary(**s) for s in x["summaries"]]
-    return section(summaries, result.seeds, x["horizon"], x["command"], x["skipped"])
+    summaries = [Summary(**s) for s in x.get("summaries", [])]
+    horizon = x.get("horizon", make_baseline(LOOKAHEAD).horizon)
+    command = x.get("command", _command(result.seeds))
+    return section(summaries, result.seeds, horizon, command, x.get("skipped", []))
 
 
 # --------------------------------------------------------------------------- entries
