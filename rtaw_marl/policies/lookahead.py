@@ -25,6 +25,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from rtaw_marl.envs.features import robot_features
 from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.baselines import BaselinePolicy, free_times
@@ -120,16 +121,12 @@ class Lookahead(BaselinePolicy):
         self.noise_mean = None if noise_mean is None else float(noise_mean)
 
     def act_sim(self, sim: WarehouseSim) -> int:
-        first = sim.robot_distances()
         if self.horizon == 0:
-            return self._nearest(first, sim.queue_mask)
-        ends = _end_distances(sim.navigator, sim.robot_xy, sim.queue_rows, sim.queue_mask)
-        costs = lookahead_costs(
-            first, ends, sim.robot, sim.robot_free_at, sim.time, sim.queue_length,
-            sim.queue_mask, self.horizon,
-            sim.config.noise_mean if self.noise_mean is None else self.noise_mean,
-        )  # fmt: skip
-        return self._nearest(costs, sim.queue_mask)
+            return self._nearest(sim.robot_distances(), sim.queue_mask)
+        noise = sim.config.noise_mean if self.noise_mean is None else self.noise_mean
+        robots, me = _observed_robots(sim)
+        rows, mask = sim.queue_rows, sim.queue_mask
+        return self._choose(sim.navigator, sim.layout.scale, robots, me, rows, mask, noise)
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         if self.navigator is None or (self.horizon and self.noise_mean is None):
@@ -141,21 +138,32 @@ class Lookahead(BaselinePolicy):
         keys = ("tasks",) if self.horizon == 0 else ("robots", "tasks", "agent")
         features = read_features(observation, keys, self.name)
         tasks = features["tasks"].astype(np.float64) * self.scale
-        first = tasks[:, 4]
         if self.horizon == 0:
-            return self._nearest(first, mask)
-        robots = features["robots"].astype(np.float64)
-        cells = np.rint(robots[:, :2] * self.scale).astype(np.int64)
+            return self._nearest(tasks[:, 4], mask)
+        robots = features["robots"]
+        me = _acting_row(robots.astype(np.float64), features["agent"])
         rows = np.rint(tasks[:, :4]).astype(np.int64)
-        me = _acting_row(robots, features["agent"])
-        ends = _end_distances(self.navigator, cells, rows, mask)
-        # Observations are float32: distances and lengths are measured again, and free
-        # times recovered as exactly as the observation allows (free_times).
+        return self._choose(self.navigator, self.scale, robots, me, rows, mask, self.noise_mean)
+
+    def _choose(
+        self,
+        navigator: Navigator,
+        scale: float,
+        robots: np.ndarray,
+        me: int,
+        rows: np.ndarray,
+        mask: np.ndarray,
+        noise_mean: float,
+    ) -> int:
+        """The choice from what the observation holds, on both paths: ``float32 [M, 3]``
+        robot rows (so near-ties are decided alike), the acting row, the queue's cells."""
+        cells = np.rint(robots[:, :2].astype(np.float64) * scale).astype(np.int64)
+        ends = _end_distances(navigator, cells, rows, mask)
         lengths = np.zeros(len(mask))
-        lengths[mask] = self.navigator.distance(rows[mask, :2], rows[mask, 2:])
-        free = free_times(features["robots"][:, 2], self.scale)  # "now" is 0
+        lengths[mask] = navigator.distance(rows[mask, :2], rows[mask, 2:])
+        free = free_times(robots[:, 2], scale)  # "now" is 0
         costs = lookahead_costs(
-            ends[me], ends, me, free, 0.0, lengths, mask, self.horizon, self.noise_mean
+            ends[me], ends, me, free, 0.0, lengths, mask, self.horizon, noise_mean
         )
         return self._nearest(costs, mask)
 
@@ -166,8 +174,9 @@ class Hungarian(BaselinePolicy):
     name = "hungarian"
 
     def act_sim(self, sim: WarehouseSim) -> int:
-        wait = np.maximum(sim.robot_free_at - sim.time, 0.0)
-        return self._choose(sim.distance_matrix(), wait, sim.robot, sim.queue_mask)
+        robots, me = _observed_robots(sim)
+        wait = free_times(robots[:, 2], sim.layout.scale)
+        return self._choose(sim.distance_matrix(), wait, me, sim.queue_mask)
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         if self.navigator is None:
@@ -207,6 +216,14 @@ def _end_distances(
     live = np.concatenate([np.arange(m), m + np.flatnonzero(mask)])
     out[np.ix_(live, np.flatnonzero(mask))] = d
     return out
+
+
+def _observed_robots(sim: WarehouseSim) -> tuple[np.ndarray, int]:
+    """``float32 [M, 3]`` robot rows as the observation holds them (times until free
+    clipped at 0: a robot idle since before now starts now) and the acting robot's row as
+    :meth:`act` finds it (of identical robots, the first: they are interchangeable)."""
+    robots = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, sim.layout.scale)
+    return robots, _acting_row(robots.astype(np.float64), robots[sim.robot])
 
 
 def _acting_row(robots: np.ndarray, agent: np.ndarray) -> int:

@@ -61,19 +61,8 @@ def _play_sim(name: str, navigator: str) -> tuple[list[int], float]:
     return actions, metrics.ttd
 
 
-#: Known gaps on ``sipp`` (seen with this seed): a robot can be free since before the
-#: decision (``free_at < time``), which lookahead's ``act_sim`` rolls out from but the
-#: observation clips to 0; two robots can share a cell with 0 time until free, and
-#: hungarian's ``act`` cannot tell which one acts. Closing them needs ``act_sim`` to
-#: change, which would change published numbers.
-_SIPP_GAP = pytest.mark.xfail(strict=True, reason="information the observation lacks")
-CASES = [
-    pytest.param(name, nav, marks=_SIPP_GAP)
-    if (name, nav) in {("lookahead", "sipp"), ("hungarian", "sipp")}
-    else (name, nav)
-    for name in (*RULES, *NETWORKS)
-    for nav in NAVIGATORS
-]
+#: Every policy on every navigator (the hindsight reference has no observation path).
+CASES = [(name, nav) for name in (*RULES, *NETWORKS) for nav in NAVIGATORS]
 
 
 @pytest.mark.parametrize(("name", "navigator"), CASES)
