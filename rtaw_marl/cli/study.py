@@ -42,7 +42,7 @@ def run(cfg: DictConfig | StudyConfig) -> StudyResult:
     output = Path(cfg.output or HydraConfig.get().runtime.output_dir)
     with claim_file(output / f"{study.name}.json") as path:
         reuse = load_result(docs / "data" / f"{study.name}.json") if cfg.reuse else None
-        result = run_study(study, seeds, output, cfg.workers, cfg.resume, reuse)
+        result = run_study(study, seeds, output, cfg.workers, cfg.resume, reuse, cfg.reuse_learned)
         save_result(path, result)
     body = study.render(result, stored)
     print(body)

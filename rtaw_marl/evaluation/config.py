@@ -118,7 +118,7 @@ class StudyConfig:
     Attributes:
         study: The study (``rtaw_marl.evaluation.studies.STUDIES``): ``table1_paper``,
             ``table1_drain``, ``table2``, ``table2_hindsight``, ``transfer``,
-            ``navigators``, ``budget_gain``, ``lookahead_horizon``.
+            ``navigators``, ``budget_gain``, ``lookahead_horizon``, ``analysis``.
         seeds: Episode seeds; ``None``: the study's own (the evaluation seeds 0-19, the
             selection seeds 1000-1019 for ``lookahead_horizon``).
         workers: Evaluation processes (a study's settings run in parallel).
@@ -129,6 +129,10 @@ class StudyConfig:
             with are read from ``<docs>/data/``.
         reuse: Take the rules' per-seed TTDs from ``<docs>/data/<study>.json`` instead of
             running them (a rule's episode depends on the seed only); needs ``docs``.
+        reuse_learned: With ``reuse``, take the learned policies' stored TTDs too, so
+            that only labels missing from the stored result run (after a change that
+            affects one rule; valid only while the checkpoints and the code that plays
+            them are those of the stored run, so check that a sample reproduces).
         write: Rewrite the study's section of its page in ``docs`` and its
             ``<docs>/data/<study>.json``; needs ``docs``.
     """
@@ -140,6 +144,7 @@ class StudyConfig:
     resume: bool = False
     docs: str | None = None
     reuse: bool = False
+    reuse_learned: bool = False
     write: bool = False
 
     def __post_init__(self) -> None:
@@ -155,3 +160,5 @@ class StudyConfig:
         for key in ("reuse", "write"):
             if getattr(self, key) and self.docs is None:
                 raise ConfigError(f"{key}=true needs docs=FOLDER (the repository's docs)")
+        if self.reuse_learned and not self.reuse:
+            raise ConfigError("reuse_learned=true needs reuse=true")

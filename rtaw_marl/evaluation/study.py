@@ -187,6 +187,7 @@ def run_study(
     workers: int = 1,
     resume: bool = False,
     reuse: StudyResult | None = None,
+    reuse_learned: bool = False,
 ) -> StudyResult:
     """Evaluate every cell of ``study`` on ``seeds``.
 
@@ -198,6 +199,9 @@ def run_study(
         resume: Take the episodes already in the journals.
         reuse: A stored result whose rule TTDs are taken instead of run, where it holds
             the same seeds.
+        reuse_learned: Take its learned policies' TTDs too (only valid while their
+            checkpoints and the code that plays them are those of the stored run; a
+            label missing from it is evaluated).
 
     Returns:
         The per-seed TTDs of every cell and label; a learned policy whose checkpoint
@@ -213,7 +217,7 @@ def run_study(
         ttd[cell.key] = {
             k: v
             for k, v in stored.items()
-            if k in cell.policies and cell.policies[k].kind == "rule"
+            if k in cell.policies and (reuse_learned or cell.policies[k].kind == "rule")
         }
         todo = {k: p for k, p in cell.policies.items() if k not in ttd[cell.key] and _ok(k, p)}
         if ttd[cell.key]:

@@ -152,3 +152,13 @@ def test_a_checkpoint_file_is_a_learned_policy(tmp_path: Path) -> None:
     by_file = run_study(_study({"RTAW+": checkpoint(path)}), [0], tmp_path / "a")
     by_name = run_study(_study({"RTAW+": learned("C_astar_m10_long_plus")}), [0], tmp_path / "b")
     assert by_file.ttd == by_name.ttd
+
+
+def test_reuse_learned_takes_every_stored_label_and_runs_the_missing_ones(tmp_path: Path) -> None:
+    policies = {"MPDM": rule("mpdm"), "lookahead": rule("lookahead"),
+                "RTAW+": learned("C_astar_m10_long_plus")}  # fmt: skip
+    stored = StudyResult(seeds=[0], ttd={"C, M=10": {"MPDM": [1.0], "RTAW+": [2.0]}})
+    result = run_study(_study(policies), [0], tmp_path, reuse=stored, reuse_learned=True)
+    row = result.ttd["C, M=10"]
+    assert (row["MPDM"], row["RTAW+"]) == ([1.0], [2.0])
+    assert row["lookahead"] != [1.0]  # missing from the stored result: evaluated
