@@ -19,7 +19,7 @@ import statistics
 import time
 
 from rtaw_marl.policies import BaselinesConfig, make_baseline
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 
 
@@ -27,7 +27,7 @@ def _sim(m: int, n: int, decisions: int) -> WarehouseSim:
     size = 256 if m >= 1000 else 60
     layout = {"name": "preset", "preset": "C", "width": size, "height": size}
     env = {"num_robots": m, "num_tasks": decisions, "queue_len": n, "episode_mode": "paper"}
-    return SimSpec.of(env, layout, "astar", "random").build()
+    return build_sim(SimSpec.of(env, layout, "astar", "random"))
 
 
 def per_decision_ms(sim: WarehouseSim, rules: dict[str, object], seed: int) -> dict[str, float]:

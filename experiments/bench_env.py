@@ -43,7 +43,7 @@ import numpy as np
 import rtaw_marl
 from rtaw_marl import warehouse_v1
 from rtaw_marl.policies import MPDM, RBTS, BaselinePolicy
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -191,7 +191,7 @@ def bench_full_episode(sizes: Sizes, policy_cls: type[BaselinePolicy]) -> tuple[
 
     def run(seed: int) -> tuple[int, float]:
         start = time.perf_counter()
-        sim = SimSpec.of(env, grid, "astar", "random").build()
+        sim = build_sim(SimSpec.of(env, grid, "astar", "random"))
         policy = policy_cls()
         decisions, _ = sim_episode(sim, policy, seed)
         return decisions, time.perf_counter() - start
@@ -218,7 +218,7 @@ def bench_throughput(sizes: Sizes, settings: Sequence[Setting]) -> list[Row]:
     for setting in settings:
         for m in sizes.robots:
             env_cfg = {"num_robots": m, "num_tasks": sizes.num_tasks, "queue_len": QUEUE_LEN}
-            sim = SimSpec.of(env_cfg, setting.layout, setting.navigator, "designated").build()
+            sim = build_sim(SimSpec.of(env_cfg, setting.layout, setting.navigator, "designated"))
             mpdm = MPDM()
             samples = repeat(lambda s, sim=sim, p=mpdm: sim_episode(sim, p, s), sizes.repeats, True)
             rows.append(Row("sim+MPDM", setting.label, m, sizes.num_tasks, samples, "decisions/s"))

@@ -28,7 +28,7 @@ import sys
 import time
 
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.mapf.conflicts import check_schedule
 
@@ -67,7 +67,7 @@ def ten_robots(layouts: str, seeds: list[int]) -> str:
     for nav in ("astar", "sipp", "cbs"):
         runs = []
         for i, p in enumerate(layouts):
-            sim = SimSpec.of(env, {"name": "preset", "preset": p}, nav, "designated").build()
+            sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": p}, nav, "designated"))
             if i == 0:
                 episode(sim, 999)  # warm-up
             runs += [episode(sim, s) for s in seeds]
@@ -94,7 +94,7 @@ def scaling(robots: list[int], seeds: list[int], navigators: dict[str, int]) -> 
             if m > max_m:
                 continue
             env = {"num_robots": m, "num_tasks": 5 * m, "queue_len": 10, **NOISELESS}
-            sim = SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated").build()
+            sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated"))
             if i == 0:
                 episode(sim, 999)
             runs = [episode(sim, s) for s in seeds]

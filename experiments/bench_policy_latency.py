@@ -26,14 +26,14 @@ from rtaw_marl.models.checkpoint import build_networks
 from rtaw_marl.models.config import RTAWConfig, RTAWPlusConfig
 from rtaw_marl.policies import MPDM
 from rtaw_marl.policies.network import SimNetworkPolicy
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 
 
 def _sim(m: int, decisions: int) -> WarehouseSim:
     layout = {"name": "preset", "preset": "C", "width": 256, "height": 256}
     env = {"num_robots": m, "num_tasks": decisions, "queue_len": 10, "episode_mode": "paper"}
-    return SimSpec.of(env, layout, "astar", "random").build()
+    return build_sim(SimSpec.of(env, layout, "astar", "random"))
 
 
 def _ms(fn, repeat: int = 3) -> float:

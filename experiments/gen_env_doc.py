@@ -27,7 +27,7 @@ Tianshou and TorchRL take this env as it is (for TorchRL beyond a few dozen robo
 `rtaw_marl.envs.torchrl_wrapper.WarehouseWrapper`: its `PettingZooWrapper` filling every
 robot's row at once, from `observe_all()`); Stable-Baselines3 (SB3-contrib's
 `MaskablePPO`) and other single-agent libraries take the Gymnasium adapter
-`rtaw/Warehouse-v1` ([gymnasium.md](gymnasium.md)), which returns each decision's own
+`rtaw/warehouse-single-v1` ([gymnasium.md](gymnasium.md)), which returns each decision's own
 reward; SuperSuit's Box wrappers apply to the flat layout. There is no parallel version:
 robots act at irregular times, so PettingZoo's `aec_to_parallel` refuses the env.
 Versions tested, snippets and known limits: [integrations.md](integrations.md).

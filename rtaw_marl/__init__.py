@@ -9,8 +9,9 @@ PettingZoo has that registry from 1.27 on; with an earlier PettingZoo (>= 1.25, 
 AgileRL) the env works the same and registration is skipped.
 
 The single-agent Gymnasium adapter (:mod:`rtaw_marl.envs.gymnasium`) registers the same
-way with Gymnasium, as ``rtaw/Warehouse-v1``: ``import gymnasium, rtaw_marl;
-gymnasium.make("rtaw/Warehouse-v1")`` works.
+way with Gymnasium, as ``rtaw/warehouse-single-v1``: ``import gymnasium, rtaw_marl;
+gymnasium.make("rtaw/warehouse-single-v1")`` works (its old id ``rtaw/Warehouse-v1`` still
+makes it, with a ``DeprecationWarning``).
 """
 
 from __future__ import annotations
@@ -19,14 +20,17 @@ import sys
 
 __all__ = ["ENV_ID", "GYMNASIUM_ENV_ID", "__version__", "register_envs"]
 __version__ = "0.1.0"
+#: The env family: module ``warehouse_v1`` (metadata name ``warehouse_v1``), PettingZoo
+#: id ``rtaw/warehouse-v1``, and the single-agent Gymnasium adapter of the same env.
 ENV_ID = "rtaw/warehouse-v1"
-#: The single-agent Gymnasium adapter's id (Gymnasium's CamelCase convention).
-GYMNASIUM_ENV_ID = "rtaw/Warehouse-v1"
+GYMNASIUM_ENV_ID = "rtaw/warehouse-single-v1"
+#: The Gymnasium adapter's id before it joined the family; still made, with a warning.
+_OLD_GYMNASIUM_ID = "rtaw/Warehouse-v1"
 
 
 def register_envs() -> None:
     """Register ``rtaw/warehouse-v1`` in PettingZoo's AEC registry (a no-op before
-    PettingZoo 1.27, which has no registry) and ``rtaw/Warehouse-v1`` in Gymnasium's
+    PettingZoo 1.27, which has no registry) and ``rtaw/warehouse-single-v1`` in Gymnasium's
     (idempotent)."""
     _register_pettingzoo()
     _register_gymnasium()
@@ -47,6 +51,8 @@ def _register_gymnasium() -> None:
 
     if GYMNASIUM_ENV_ID not in gymnasium.registry:
         gymnasium.register(GYMNASIUM_ENV_ID, entry_point="rtaw_marl.envs.gymnasium:WarehouseEnv")
+    if _OLD_GYMNASIUM_ID not in gymnasium.registry:
+        gymnasium.register(_OLD_GYMNASIUM_ID, entry_point="rtaw_marl.envs.gymnasium:deprecated_env")
 
 
 if "pettingzoo" in sys.modules:

@@ -1,6 +1,6 @@
-"""# RTAW Warehouse, single-agent Gymnasium adapter (`rtaw/Warehouse-v1`)
+"""# RTAW Warehouse, single-agent Gymnasium adapter (`rtaw/warehouse-single-v1`)
 
-The warehouse of `rtaw_warehouse_v1` ([environment.md](environment.md)) as a Gymnasium
+The warehouse of `warehouse_v1` ([environment.md](environment.md)) as a Gymnasium
 `Env`: one decision per `step`, taken for whichever robot is free, so one policy serves
 every robot (the single decision stream that `rtaw-train`'s batched env also gives its
 shared policy). For single-agent libraries: Stable-Baselines3 and SB3-contrib's
@@ -9,7 +9,7 @@ tested and snippets: [integrations.md](integrations.md).
 
 | Import             | `from rtaw_marl.envs.gymnasium import WarehouseEnv`                     |
 |--------------------|-------------------------------------------------------------------------|
-| Make               | `gymnasium.make("rtaw/Warehouse-v1", num_robots=10, ...)`               |
+| Make               | `gymnasium.make("rtaw/warehouse-single-v1", num_robots=10, ...)`        |
 | Actions            | `Discrete(queue_len)`                                                   |
 | Observation        | `Box(-inf, inf, (3M + 46N + 3,), float32)` (flat, default)              |
 | Action mask        | `env.action_masks()` (bool) and `info["action_mask"]` (int8)            |
@@ -18,10 +18,10 @@ tested and snippets: [integrations.md](integrations.md).
 
 ## Registration
 
-Importing this module registers `rtaw/Warehouse-v1` with `gymnasium.register`; so do
+Importing this module registers `rtaw/warehouse-single-v1` with `gymnasium.register`; so do
 `from rtaw_marl import warehouse_v1`, `rtaw_marl.register_envs()`, and importing
 `rtaw_marl` after `gymnasium`. From a fresh interpreter,
-`gymnasium.make("rtaw_marl.envs.gymnasium:rtaw/Warehouse-v1")` imports and registers in
+`gymnasium.make("rtaw_marl.envs.gymnasium:rtaw/warehouse-single-v1")` imports and registers in
 one call. `gymnasium.make` adds Gymnasium's usual `PassiveEnvChecker` and
 `OrderEnforcing` wrappers and no `TimeLimit`.
 
@@ -91,11 +91,12 @@ defaults to `"flat"`; an unknown key or option is a `ConfigError` listing them.
 
 ## Version History
 
-* v1: initial release (the features of `rtaw_warehouse_v1`).
+* v1: initial release (the features of `warehouse_v1`).
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -113,7 +114,7 @@ from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import seed_value
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
-__all__ = ["WarehouseEnv"]
+__all__ = ["WarehouseEnv", "deprecated_env"]
 
 Features = np.ndarray | dict[str, np.ndarray]
 Info = dict[str, Any]
@@ -215,3 +216,14 @@ class WarehouseEnv(gymnasium.Env):
 
 
 register_envs()
+
+
+def deprecated_env(**kwargs: Any) -> WarehouseEnv:
+    """The entry point of the adapter's old id ``rtaw/Warehouse-v1``: the same env, with a
+    ``DeprecationWarning`` naming ``rtaw/warehouse-single-v1``."""
+    warnings.warn(
+        "rtaw/Warehouse-v1 is deprecated, use rtaw/warehouse-single-v1",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return WarehouseEnv(**kwargs)

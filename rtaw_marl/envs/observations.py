@@ -159,7 +159,7 @@ class ObservationLayout:
 def read_features(
     observation: Mapping[str, Any], keys: Iterable[str], reader: str = "this policy"
 ) -> dict[str, np.ndarray]:
-    """The feature arrays ``keys`` of one ``rtaw_warehouse_v1`` observation.
+    """The feature arrays ``keys`` of one ``warehouse_v1`` observation.
 
     Args:
         observation: ``{"observation": features, "action_mask": [N]}`` as ``observe`` or
@@ -173,7 +173,7 @@ def read_features(
 
     Raises:
         ConfigError: The features lack one of ``keys`` (``compact`` has no ``robots``),
-            or a flat vector has no ``rtaw_warehouse_v1`` size.
+            or a flat vector has no ``warehouse_v1`` size.
     """
     features = observation["observation"]
     if not isinstance(features, Mapping):
@@ -193,7 +193,7 @@ def _unflatten(flat: np.ndarray, queue_len: int) -> dict[str, np.ndarray]:
     if robots < 0 or robots % len(ROBOT_FEATURES):
         raise ConfigError(
             f"a flat observation of {flat.shape[-1]} values with N={queue_len} is not a "
-            f"rtaw_warehouse_v1 layout (3M + 46N + 3 or 46N + 3 values)"
+            f"warehouse_v1 layout (3M + 46N + 3 or 46N + 3 values)"
         )
     kind = "full" if robots else "compact"
     return ObservationLayout(kind, "flat", robots // 3, queue_len).unflatten(flat)

@@ -1,4 +1,4 @@
-"""# RTAW Warehouse (``rtaw_warehouse_v1``)
+"""# RTAW Warehouse (``warehouse_v1``)
 
 Lifelong multi-robot task allocation in a warehouse grid (the RTAW paper's MDP) as a
 PettingZoo AEC environment. Whenever a robot becomes free it is the acting agent and
@@ -134,15 +134,19 @@ next be free), `*` the robot choosing now, then a status line.
 ## Arguments
 
 `env(layout=None, navigator=None, tasks=None, render_mode=None, observation="full",
-obs_format="dict", **env)`: `**env` are the keys of `SimConfig` (`num_robots=10,
-num_tasks=500, queue_len=10, episode_mode="drain", noise_mean=0.25, noise_var=0.25,
+obs_format="dict", scenario=None, **env)`: `scenario` names a setting of
+`rtaw_marl.scenarios.SCENARIOS` (as `scenario=NAME` on the command line; the other
+arguments override it), `layout="C"` is the paper's layout C as `layout=C` is; `**env`
+are the keys of `SimConfig` (`num_robots=10, num_tasks=500, queue_len=10,
+episode_mode="drain", noise_mean=0.25, noise_var=0.25,
 reward="ttd", robot_starts=None, robot_free_times=None`); an unknown key or option is a
 `ConfigError` listing them. `layout` and `tasks` take a name, a `{"name": ..., **keys}`
 mapping, a typed option (`rtaw_marl.sim.options`) or an object (`Layout`, `TaskStream`),
 `layout` also a file path (default `"shelves"`, `"designated"`). `navigator` is
 `"direct"`, `"astar"` (default), or a collision-aware `"sipp"` / `"cbs"` (robots wait
 for each other; the reward is the TTD planned at the decision, the metrics count the
-executed waits; needs `noise_mean=0, noise_var=0`).
+executed waits; their tasks are timed by whole-second paths, so they set `noise_mean=0,
+noise_var=0` unless given, as `navigator=sipp` does on the command line).
 
 ## Version History
 
@@ -150,8 +154,11 @@ executed waits; needs `noise_mean=0, noise_var=0`).
   (same feature values), `observation="compact"`, `obs_format="flat"`, `state()`, flat
   metrics in `infos` from `reset()` on (v0: `infos[agent]["episode"]` at the end),
   `render_mode="human"`, `np_random`, `observation_spaces` / `action_spaces`.
-* v0: initial release (features beside `action_mask` at the top level). Removed:
-  `rtaw_marl.warehouse_v0.env()` raises PettingZoo's `DeprecatedEnv`.
+* v0: an internal draft, never released (features beside `action_mask` at the top
+  level); its module is gone.
+* The env family's names (no behaviour change): metadata name `warehouse_v1` (was
+  `rtaw_warehouse_v1`), the Gymnasium adapter `rtaw/warehouse-single-v1` (was
+  `rtaw/Warehouse-v1`, still made with a `DeprecationWarning`).
 """
 
 from __future__ import annotations
@@ -170,11 +177,12 @@ from rtaw_marl import register_envs
 from rtaw_marl.envs.observations import AgentViews, Features, ObservationLayout, state_vector
 from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.scenarios import scenario as find_scenario
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.inputs import seed_value
 from rtaw_marl.sim.metrics import EpisodeMetrics
-from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
 __all__ = ["env", "raw_env", "zero_info"]
@@ -220,7 +228,7 @@ class raw_env(AECEnv):
     """The unwrapped warehouse AEC environment; see the module docstring."""
 
     metadata: ClassVar[dict[str, Any]] = {
-        "name": "rtaw_warehouse_v1",
+        "name": "warehouse_v1",
         "render_modes": ["human", "ansi"],
         "is_parallelizable": False,
     }
@@ -234,6 +242,7 @@ class raw_env(AECEnv):
         *,
         observation: str = "full",
         obs_format: str = "dict",
+        scenario: str | None = None,
         **env: Any,
     ) -> None:
         """Build the env (see the module docstring, *Arguments*).
@@ -247,6 +256,8 @@ class raw_env(AECEnv):
             render_mode: ``None``, ``"human"`` or ``"ansi"``.
             observation: ``"full"`` or ``"compact"`` (no robot table).
             obs_format: ``"dict"`` or ``"flat"`` (one vector).
+            scenario: A :data:`~rtaw_marl.scenarios.SCENARIOS` name; the groups and keys
+                given here override it.
             **env: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`).
 
         Raises:
@@ -258,6 +269,12 @@ class raw_env(AECEnv):
             raise ConfigError(
                 f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
             )
+        if scenario is not None:
+            named = find_scenario(scenario)
+            layout = named.layout if layout is None else layout
+            navigator = named.navigator if navigator is None else navigator
+            tasks = named.tasks if tasks is None else tasks
+            env = {**named.env, **env}
         spec = SimSpec.of(env, layout, navigator, tasks)
         m, n = spec.env.num_robots, spec.env.queue_len
         self.obs_layout = ObservationLayout(observation, obs_format, m, n)
@@ -274,7 +291,7 @@ class raw_env(AECEnv):
         self._views = AgentViews(self.sim, self.obs_layout)
 
     @property
-    def navigator(self) -> Navigator:
+    def navigator(self) -> DistanceModel:
         """The simulator's navigator (RBTS uses it to measure other robots' distances)."""
         return self.sim.navigator
 

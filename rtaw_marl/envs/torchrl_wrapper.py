@@ -1,4 +1,4 @@
-"""TorchRL's ``PettingZooWrapper`` for ``rtaw_warehouse_v1``, every robot's row at once.
+"""TorchRL's ``PettingZooWrapper`` for ``warehouse_v1``, every robot's row at once.
 
 The stock :class:`torchrl.envs.PettingZooWrapper` fills its ``[M, ...]`` output one agent
 at a time: per agent and step it indexes the stacked observation spec (which builds a
@@ -48,7 +48,7 @@ class WarehouseWrapper(PettingZooWrapper):
     """``PettingZooWrapper(env, use_mask=True, group_map=ALL_IN_ONE_GROUP)``, vectorised.
 
     Args:
-        env: A ``rtaw_warehouse_v1`` AEC env (``warehouse_v1.env(...)``, wrapped or raw).
+        env: A ``warehouse_v1`` AEC env (``warehouse_v1.env(...)``, wrapped or raw).
         return_state: Also put ``state()`` (``float32 [3M + 7N]``) at the root, key
             ``"state"``.
         seed: Seed of the first reset.
@@ -68,7 +68,7 @@ class WarehouseWrapper(PettingZooWrapper):
     ) -> None:
         if not isinstance(getattr(env, "unwrapped", None), raw_env):
             raise TypeError(
-                "WarehouseWrapper wraps the rtaw_warehouse_v1 env (warehouse_v1.env(...)), "
+                "WarehouseWrapper wraps the warehouse_v1 env (warehouse_v1.env(...)), "
                 f"got {type(env).__name__}; use torchrl's PettingZooWrapper for other envs"
             )
         with warnings.catch_warnings():

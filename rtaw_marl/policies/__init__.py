@@ -17,7 +17,7 @@ from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, RandomPolic
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.policies.hindsight import Hindsight
 from rtaw_marl.policies.lookahead import Hungarian, Lookahead
-from rtaw_marl.sim.navigation import Navigator
+from rtaw_marl.sim.distances import DistanceModel
 
 if TYPE_CHECKING:
     from rtaw_marl.policies.network import NetworkPolicy, load_policy
@@ -38,7 +38,7 @@ __all__ = [
     "make_baseline",
 ]
 
-_Factory = Callable[[Navigator | None, float, BaselinesConfig], "BaselinePolicy | Hindsight"]
+_Factory = Callable[[DistanceModel | None, float, BaselinesConfig], "BaselinePolicy | Hindsight"]
 
 #: Every rule evaluated by name (``rtaw-eval policy=[...]``).
 BASELINES: dict[str, _Factory] = {
@@ -56,7 +56,7 @@ _NETWORK = ("NetworkPolicy", "load_policy")
 
 def make_baseline(
     name: str,
-    navigator: Navigator | None = None,
+    navigator: DistanceModel | None = None,
     scale: float = 1.0,
     params: BaselinesConfig | None = None,
     *,

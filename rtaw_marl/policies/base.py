@@ -3,7 +3,7 @@
 A policy picks a queue slot for the free robot, in either of two ways that choose the
 same slot for the same state:
 
-* ``act(observation)``: on a ``rtaw_warehouse_v1`` observation ``{"observation":
+* ``act(observation)``: on a ``warehouse_v1`` observation ``{"observation":
   features, "action_mask": [N]}`` (``observe`` / ``last()``; dict or flat features);
 * ``act_sim(sim)``: the fast path on the bare simulator, used by evaluation.
 
@@ -40,7 +40,7 @@ class Policy(Protocol):
         """The slot for ``sim``'s selected robot (fast path)."""
 
     def act(self, observation: Mapping[str, Any]) -> int:
-        """The slot for the robot whose ``rtaw_warehouse_v1`` observation this is."""
+        """The slot for the robot whose ``warehouse_v1`` observation this is."""
 
 
 def simulator_of(source: Any) -> WarehouseSim:

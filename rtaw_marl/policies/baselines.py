@@ -3,7 +3,7 @@
 Each rule is a :class:`~rtaw_marl.policies.base.Policy`: it acts either on the simulator
 directly (:meth:`BaselinePolicy.act_sim`, the fast path used by evaluation) or on a
 PettingZoo observation (:meth:`act`: the ``{"observation": features, "action_mask":
-mask}`` of ``rtaw_warehouse_v1``, dict or flat; RBTS needs ``observation="full"``), and
+mask}`` of ``warehouse_v1``, dict or flat; RBTS needs ``observation="full"``), and
 both paths choose the same task for the same state once the rule is bound to the env
 (:meth:`BaselinePolicy.bind`, or ``make_baseline(name, env=env)``), which gives it the
 navigator, the scale and the completion noise's mean. Ties (within a relative 1e-6) are broken
@@ -34,7 +34,7 @@ from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.base import simulator_of
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.navigation import Navigator
+from rtaw_marl.sim.distances import DistanceModel
 
 __all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy", "free_times"]
 
@@ -67,7 +67,7 @@ class BaselinePolicy(ABC):
 
     name: str = ""
 
-    def __init__(self, navigator: Navigator | None = None, scale: float = 1.0) -> None:
+    def __init__(self, navigator: DistanceModel | None = None, scale: float = 1.0) -> None:
         self.navigator = navigator
         self.scale = float(scale)
         #: Mean completion noise, for rules that model it (``None``: the simulator's).
@@ -97,7 +97,7 @@ class BaselinePolicy(ABC):
 
     @abstractmethod
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        """The slot to assign, from a ``rtaw_warehouse_v1`` observation of the free robot."""
+        """The slot to assign, from a ``warehouse_v1`` observation of the free robot."""
 
     def _nearest(self, d: np.ndarray, mask: np.ndarray) -> int:
         """Index of the smallest ``d`` among ``mask``; ties broken at random."""

@@ -30,7 +30,7 @@ from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.baselines import BaselinePolicy, free_times
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.navigation import Navigator
+from rtaw_marl.sim.distances import DistanceModel
 
 __all__ = ["Hungarian", "Lookahead", "lookahead_costs"]
 
@@ -108,7 +108,7 @@ class Lookahead(BaselinePolicy):
 
     def __init__(
         self,
-        navigator: Navigator | None = None,
+        navigator: DistanceModel | None = None,
         scale: float = 1.0,
         *,
         horizon: int,
@@ -147,7 +147,7 @@ class Lookahead(BaselinePolicy):
 
     def _choose(
         self,
-        navigator: Navigator,
+        navigator: DistanceModel,
         scale: float,
         robots: np.ndarray,
         me: int,
@@ -205,7 +205,7 @@ class Hungarian(BaselinePolicy):
 
 
 def _end_distances(
-    navigator: Navigator, robot_xy: np.ndarray, rows: np.ndarray, mask: np.ndarray
+    navigator: DistanceModel, robot_xy: np.ndarray, rows: np.ndarray, mask: np.ndarray
 ) -> np.ndarray:
     """``float64 [M + N, N]``: distances from each robot's cell, then from each queued
     destination, to each queued origin; ``inf`` for empty slots (rows and columns)."""

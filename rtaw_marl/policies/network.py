@@ -1,7 +1,7 @@
 """Trained RTAW networks as greedy policies, loaded from checkpoints or the shipped zoo.
 
 A :class:`NetworkPolicy` acts on the bare simulator (``act_sim``, the evaluation's fast
-path) and on ``rtaw_warehouse_v1`` observations (``act``); both feed the network the
+path) and on ``warehouse_v1`` observations (``act``); both feed the network the
 very arrays of :func:`~rtaw_marl.envs.features.decision_features`, so they choose the
 same slot bit for bit. The paper's network (``model=rtaw``) reads ``robots``, ``tasks``
 and ``agent``: it needs ``observation="full"``; RTAW+ (``model=rtaw_plus``) reads
@@ -99,7 +99,7 @@ class NetworkPolicy:
 
     @torch.no_grad()
     def act(self, observation: Mapping[str, Any]) -> int:
-        """The slot with the largest logit, from a ``rtaw_warehouse_v1`` observation.
+        """The slot with the largest logit, from a ``warehouse_v1`` observation.
 
         Args:
             observation: ``{"observation": features, "action_mask": int8 [N]}`` (dict or

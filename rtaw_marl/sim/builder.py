@@ -19,8 +19,8 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.budget import check_memory
 from rtaw_marl.sim.config import SimBuffers, SimConfig
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.options import (
     AStarConfig,
     DesignatedTasksConfig,
@@ -77,10 +77,6 @@ class SimSpec:
             tasks=spec.tasks if tasks is None else task_option(tasks),
         )
 
-    def build(self) -> WarehouseSim:
-        """One simulator for this spec (:func:`build_sim`)."""
-        return SimFactory(self)()
-
     def as_dict(self) -> dict[str, Any]:
         """Plain values (lists, not tuples) for results and checkpoints."""
         return _plain(dataclasses.asdict(self))
@@ -127,7 +123,7 @@ class SimFactory:
             self._check_memory(*size, name=spec.layout.name)
         self.layout: Layout = spec.layout.build()
         self._check_memory(self.layout.width, self.layout.height, name=self.layout.name)
-        self.navigator: Navigator = spec.navigator.navigator(self.layout)
+        self.navigator: DistanceModel = spec.navigator.distance_model(self.layout)
         self.tasks: TaskStream = spec.tasks.build()
 
     def _check_memory(self, width: int, height: int, name: str) -> None:

@@ -40,11 +40,11 @@ import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.config import REWARDS, SimBuffers, SimConfig
+from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, InstantTravel
 from rtaw_marl.sim.inputs import slot_index
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
-from rtaw_marl.sim.navigation import Navigator
 from rtaw_marl.sim.tasks import TaskStream
 
 if TYPE_CHECKING:
@@ -109,7 +109,7 @@ class WarehouseSim:
         self,
         config: SimConfig,
         layout: Layout,
-        navigator: Navigator,
+        navigator: DistanceModel,
         tasks: TaskStream,
         buffers: SimBuffers | None = None,
         executor: Executor | None = None,

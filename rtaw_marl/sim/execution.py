@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.navigation import Navigator
 
 if TYPE_CHECKING:
     # Type-only: the schedule type lives with the planners that produce it.
@@ -95,7 +95,7 @@ class Executor(ABC):
         """Whether robots occupy cells and wait for each other (a schedule exists)."""
 
     @abstractmethod
-    def bind(self, config: SimSettings, layout: Layout, navigator: Navigator) -> None:
+    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
         """Attach to a simulator; called once by its constructor.
 
         Raises:
@@ -129,8 +129,8 @@ class Executor(ABC):
             now: The decision time.
             task: Task id (row of ``records.tasks``).
             row: ``int64 [4]`` the task ``(ox, oy, dx, dy)``.
-            distance: Navigator distance from the robot to the origin.
-            length: Navigator distance from the origin to the destination.
+            distance: DistanceModel distance from the robot to the origin.
+            length: DistanceModel distance from the origin to the destination.
 
         Returns:
             ``(ttd, finish)``: the task's travel delay and completion time as known now.
@@ -187,7 +187,7 @@ class InstantTravel(Executor):
     def collision_aware(self) -> bool:
         return False
 
-    def bind(self, config: SimSettings, layout: Layout, navigator: Navigator) -> None:
+    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
         del layout
         self._config = config
         self._noise_std = float(np.sqrt(config.noise_var))

@@ -20,7 +20,7 @@ import pytest
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.errors import LayoutError, RtawError, TaskFileError
 from rtaw_marl.evaluation.config import EvalConfig
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.tasks import FixedTasks, load_task_csv
@@ -327,7 +327,7 @@ def test_valid_robot_starts_still_work(starts: Any) -> None:
     spec = SimSpec.of(
         {**env, "robot_starts": starts}, {"name": "open", "width": 5}, "sipp", "random"
     )
-    sim = spec.build()
+    sim = build_sim(spec)
     sim.reset(0)
     assert sim.robot_start_xy.tolist() == [[1, 1], [2, 2]]
 
@@ -352,4 +352,4 @@ def test_walled_in_cell_is_blamed_whatever_the_task_order(files: Path) -> None:
         tasks = FixedTasks(rows)
         spec = SimSpec.of(env, str(files / "walled.txt"), "astar", tasks)
         with pytest.raises(LayoutError, match=rf"origin of task {index} at \(x=5, y=5\)"):
-            spec.build().reset(0)
+            build_sim(spec).reset(0)

@@ -17,6 +17,7 @@ from scipy import stats as scipy_stats
 from rtaw_marl.cli.common import typed
 from rtaw_marl.cli.eval import run
 from rtaw_marl.config import CONF_DIR, compose, to_typed
+from rtaw_marl.sim.builder import build_sim
 
 GROUPS = ("env", "layout", "navigator", "tasks", "scenario", "row", "experiment")
 GLOBAL_GROUPS = ("scenario", "row", "experiment")  # packaged at the top level
@@ -53,7 +54,7 @@ def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Pat
         overrides += ["env.queue_len=2", "layout=open"]
     cfg = _compose(overrides)
     assert cfg[group if group not in GLOBAL_GROUPS else "env"] is not None
-    sim = typed(cfg).sim_spec().build()
+    sim = build_sim(typed(cfg).sim_spec())
     sim.reset(0)
     assert not sim.done
 

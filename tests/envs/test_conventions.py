@@ -1,4 +1,4 @@
-"""PettingZoo conventions of ``rtaw_warehouse_v1`` over every observation option.
+"""PettingZoo conventions of ``warehouse_v1`` over every observation option.
 
 PettingZoo's own checks (``api_test``, ``seed_test``, ``render_test``,
 ``performance_benchmark``, the state checks) on both ``observation`` options and both
@@ -19,9 +19,8 @@ import numpy as np
 import pytest
 from gymnasium.utils import seeding
 from pettingzoo.test import api_test, performance_benchmark, render_test, seed_test
-from pettingzoo.utils.deprecated_module import DeprecatedEnv
 
-from rtaw_marl import warehouse_v0, warehouse_v1
+from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.features import relational_features
 from rtaw_marl.envs.observations import FEATURE_KEYS
 from rtaw_marl.envs.pettingzoo import zero_info
@@ -243,10 +242,3 @@ def test_np_random_is_seeded_by_reset() -> None:
     b.reset()
     assert first_valid(a.last()[0]) == first_valid(b.last()[0])
     np.testing.assert_array_equal(a.state(), b.state())
-
-
-def test_v0_is_deprecated() -> None:
-    with pytest.raises(DeprecatedEnv, match="use warehouse_v1"):
-        warehouse_v0.env(num_robots=2)
-    with pytest.raises(DeprecatedEnv):
-        warehouse_v0.raw_env()

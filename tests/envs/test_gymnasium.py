@@ -70,10 +70,10 @@ def test_make_builds_the_adapter_with_its_kwargs() -> None:
 def test_registration_from_a_fresh_interpreter() -> None:
     """``import gymnasium, rtaw_marl`` registers the id; the ``module:id`` form always works."""
     code = (
-        "import gymnasium, rtaw_marl; gymnasium.make('rtaw/Warehouse-v1');"
+        "import gymnasium, rtaw_marl; gymnasium.make('rtaw/warehouse-single-v1');"
         "import sys; sys.modules.pop('rtaw_marl.envs.gymnasium');"
-        "gymnasium.registry.pop('rtaw/Warehouse-v1');"
-        "gymnasium.make('rtaw_marl.envs.gymnasium:rtaw/Warehouse-v1'); print('ok')"
+        "gymnasium.registry.pop('rtaw/warehouse-single-v1');"
+        "gymnasium.make('rtaw_marl.envs.gymnasium:rtaw/warehouse-single-v1'); print('ok')"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
@@ -209,3 +209,15 @@ def test_render_ansi_is_the_pettingzoo_text_and_human_prints_each_step(
     out = capsys.readouterr().out
     assert out.count("decision ") == 2
     assert out.startswith(env.render())
+
+
+def test_the_old_id_still_makes_the_adapter_with_a_warning() -> None:
+    import gymnasium
+
+    import rtaw_marl
+
+    rtaw_marl.register_envs()
+    with pytest.warns(DeprecationWarning, match="use rtaw/warehouse-single-v1"):
+        env = gymnasium.make("rtaw/Warehouse-v1", num_robots=3, num_tasks=5)
+    assert env.unwrapped.__class__.__name__ == "WarehouseEnv"
+    assert gymnasium.make("rtaw/warehouse-single-v1", num_robots=3, num_tasks=5)

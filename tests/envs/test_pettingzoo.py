@@ -1,4 +1,4 @@
-"""Tests of the PettingZoo warehouse env ``rtaw_warehouse_v1`` against its docstring spec.
+"""Tests of the PettingZoo warehouse env ``warehouse_v1`` against its docstring spec.
 
 Expected values come from independent oracles where possible: on an obstacle-free grid
 the ``astar`` distance is the Manhattan distance and the ``direct`` distance the
@@ -209,7 +209,7 @@ def test_registry_make_and_metadata() -> None:
     assert rtaw_marl.ENV_ID == "rtaw/warehouse-v1"
     env = pettingzoo.make("aec", "rtaw/warehouse-v1", num_robots=3)
     assert isinstance(env.unwrapped, warehouse_v1.raw_env)
-    assert env.metadata["name"] == "rtaw_warehouse_v1"
+    assert env.metadata["name"] == "warehouse_v1"
     assert env.possible_agents == ["robot_0", "robot_1", "robot_2"]
     env.reset(seed=0)
     assert env.agents == env.possible_agents

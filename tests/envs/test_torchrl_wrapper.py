@@ -1,4 +1,4 @@
-"""``rtaw_warehouse_v1`` through TorchRL's ``PettingZooWrapper`` (the interop route).
+"""``warehouse_v1`` through TorchRL's ``PettingZooWrapper`` (the interop route).
 
 The stock wrapper (``use_mask=True``, all robots in one group) and its vectorised
 subclass :class:`WarehouseWrapper`, which ``rtaw_marl/training/interop.py`` builds:
@@ -120,7 +120,7 @@ def test_vectorised_wrapper_equals_the_stock_wrapper(
 def test_vectorised_wrapper_refuses_other_envs() -> None:
     from pettingzoo.test.example_envs import generated_agents_env_v0
 
-    with pytest.raises(TypeError, match="wraps the rtaw_warehouse_v1 env"):
+    with pytest.raises(TypeError, match="wraps the warehouse_v1 env"):
         WarehouseWrapper(generated_agents_env_v0.env())
 
 

@@ -6,14 +6,14 @@ import pytest
 
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 
 ENV = {"num_robots": 10, "num_tasks": 30, "noise_mean": 0.0, "noise_var": 0.0}
 
 
 @pytest.mark.parametrize("navigator", ["astar", "sipp", "cbs"])
 def test_fleet_counters_only_with_collision_aware_navigators(navigator: str) -> None:
-    sim = SimSpec.of(ENV, {"name": "preset", "preset": "A"}, navigator, "designated").build()
+    sim = build_sim(SimSpec.of(ENV, {"name": "preset", "preset": "A"}, navigator, "designated"))
     res = evaluate(sim, {"mpdm": make_baseline("mpdm")}, [0, 1])["mpdm"]
     assert len(res["ttd"]) == len(res["wall_time_s"]) == 2
     counters = {"planning_calls", "evacuations", "cbs_fallbacks"}
@@ -33,8 +33,8 @@ def test_waiting_makes_ttd_no_shorter_than_astar() -> None:
     lead to different decisions.
     """
     sims = {
-        nav: SimSpec.of({**ENV, "num_tasks": 10}, {"name": "preset", "preset": "C"}, nav,
-                       "designated").build()
+        nav: build_sim(SimSpec.of({**ENV, "num_tasks": 10}, {"name": "preset", "preset": "C"}, nav,
+                       "designated"))
         for nav in ("astar", "sipp", "cbs")
     }  # fmt: skip
     ttd = {}

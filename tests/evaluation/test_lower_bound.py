@@ -19,7 +19,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.tasks import FixedTasks
 from tests.training.conftest import POC_ENV, POC_LAYOUT
@@ -35,9 +35,11 @@ from tests.training.conftest import POC_ENV, POC_LAYOUT
 )
 @pytest.mark.parametrize("robots", [1, 4])
 def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots: int) -> None:
-    sim = SimSpec.of(
-        {"num_robots": robots, "num_tasks": 40, "queue_len": 5}, layout, navigator, tasks
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": robots, "num_tasks": 40, "queue_len": 5}, layout, navigator, tasks
+        )
+    )
     policies = {
         name: make_baseline(name, sim.navigator, sim.layout.scale)
         for name in ("mpdm", "rbts", "random")
@@ -52,24 +54,28 @@ def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots:
 
 
 def test_bound_below_poc_optimum() -> None:
-    sim = SimSpec.of(
-        POC_ENV,
-        POC_LAYOUT,
-        "direct",
-        "poc",
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            POC_ENV,
+            POC_LAYOUT,
+            "direct",
+            "poc",
+        )
+    )
     assert ttd_lower_bound(sim, 0) <= 17.936
 
 
 def test_bound_is_tight_on_a_chain() -> None:
     """One robot, tasks laid end to end: every policy's TTD (2) equals the bound."""
     tasks = FixedTasks([[1, 0, 2, 0], [3, 0, 4, 0]])
-    sim = SimSpec.of(
-        {"num_robots": 1, "num_tasks": 2, "queue_len": 1, "robot_starts": [[0, 0]]},
-        {"name": "open", "width": 6, "height": 1},
-        "astar",
-        tasks,
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 1, "num_tasks": 2, "queue_len": 1, "robot_starts": [[0, 0]]},
+            {"name": "open", "width": 6, "height": 1},
+            "astar",
+            tasks,
+        )
+    )
     assert ttd_lower_bound(sim, 0) == 2.0
     sim.reset(0)
     assert -(sim.step(0) + sim.step(0)) == 2.0
@@ -78,12 +84,14 @@ def test_bound_is_tight_on_a_chain() -> None:
 def test_a_task_never_follows_itself() -> None:
     """A single task whose destination is next to its origin still pays the robot's travel."""
     tasks = FixedTasks([[5, 0, 4, 0]])
-    sim = SimSpec.of(
-        {"num_robots": 1, "num_tasks": 1, "queue_len": 1, "robot_starts": [[0, 0]]},
-        {"name": "open", "width": 6, "height": 1},
-        "astar",
-        tasks,
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 1, "num_tasks": 1, "queue_len": 1, "robot_starts": [[0, 0]]},
+            {"name": "open", "width": 6, "height": 1},
+            "astar",
+            tasks,
+        )
+    )
     assert ttd_lower_bound(sim, 0) == 5.0
 
 
@@ -95,12 +103,14 @@ def test_first_tasks_come_from_the_queue() -> None:
     each robot would take the task at its feet for 0.
     """
     tasks = FixedTasks([[9, 0, 8, 0], [0, 0, 1, 0]])
-    sim = SimSpec.of(
-        {"num_robots": 2, "num_tasks": 2, "queue_len": 1, "robot_starts": [[0, 0], [9, 0]]},
-        {"name": "open", "width": 10, "height": 1},
-        "astar",
-        tasks,
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 2, "num_tasks": 2, "queue_len": 1, "robot_starts": [[0, 0], [9, 0]]},
+            {"name": "open", "width": 10, "height": 1},
+            "astar",
+            tasks,
+        )
+    )
     assert untimed_assignment_bound(sim, 0) == 0.0
     assert ttd_lower_bound(sim, 0) == 18.0
     sim.reset(0)
@@ -111,19 +121,21 @@ def test_a_robot_free_again_at_once_keeps_the_bound_valid() -> None:
     """A zero-length task at robot 0's feet frees it at t=0 again: it wins the tie and
     takes task 1 too, so robot 1 never moves and the episode's TTD is 0."""
     tasks = FixedTasks([[0, 0, 0, 0], [0, 0, 5, 0]])
-    sim = SimSpec.of(
-        {
-            "num_robots": 2,
-            "num_tasks": 2,
-            "queue_len": 1,
-            "robot_starts": [[0, 0], [9, 0]],
-            "noise_mean": 0,
-            "noise_var": 0,
-        },
-        {"name": "open", "width": 10, "height": 1},
-        "astar",
-        tasks,
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {
+                "num_robots": 2,
+                "num_tasks": 2,
+                "queue_len": 1,
+                "robot_starts": [[0, 0], [9, 0]],
+                "noise_mean": 0,
+                "noise_var": 0,
+            },
+            {"name": "open", "width": 10, "height": 1},
+            "astar",
+            tasks,
+        )
+    )
     sim.reset(0)
     assert sim.step(0) == 0.0
     assert sim.robot == 0
@@ -152,12 +164,14 @@ def test_same_slot_refill_is_refused() -> None:
     (0,0)->(9,9), but a policy that always takes the short one serves only short tasks,
     and beats what an assignment on that list claimed to be a lower bound.
     """
-    sim = SimSpec.of(
-        {"num_robots": 10, "num_tasks": 200, "queue_len": 2, "noise_mean": 0, "noise_var": 0},
-        {"name": "open", "width": 10, "height": 10},
-        "direct",
-        "two_task",
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 10, "num_tasks": 200, "queue_len": 2, "noise_mean": 0, "noise_var": 0},
+            {"name": "open", "width": 10, "height": 10},
+            "direct",
+            "two_task",
+        )
+    )
     claimed = untimed_assignment_bound(sim, 0)
     sim.reset(0)
     while not sim.done:
@@ -169,20 +183,24 @@ def test_same_slot_refill_is_refused() -> None:
 
 
 def test_paper_mode_is_rejected() -> None:
-    sim = SimSpec.of(
-        {"num_robots": 2, "num_tasks": 10, "episode_mode": "paper"}, "open", "direct", "random"
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 2, "num_tasks": 10, "episode_mode": "paper"}, "open", "direct", "random"
+        )
+    )
     with pytest.raises(ConfigError, match="drain"):
         ttd_lower_bound(sim, 0)
 
 
 def test_scales_to_5000_tasks() -> None:
-    sim = SimSpec.of(
-        {"num_robots": 1000, "num_tasks": 5000},
-        {"name": "open", "width": 300, "height": 300},
-        "direct",
-        "random",
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 1000, "num_tasks": 5000},
+            {"name": "open", "width": 300, "height": 300},
+            "direct",
+            "random",
+        )
+    )
     bound = ttd_lower_bound(sim, 0)
     metrics = evaluate(sim, {"mpdm": make_baseline("mpdm")}, [0])
     assert 0 < bound <= metrics["mpdm"]["ttd"][0]

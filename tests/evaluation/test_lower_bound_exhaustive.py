@@ -19,7 +19,7 @@ import pytest
 
 from rtaw_marl.errors import PlanningError
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.tasks import FixedTasks, TaskStream
@@ -120,7 +120,7 @@ def instance(index: int, navigator: str, noise: str) -> tuple[WarehouseSim, int]
     # deadlocks; past 20 the new robot plans alone around the others, still collision-free.
     nav = {"name": "cbs", "max_nodes": 20} if navigator == "cbs" else navigator
     spec = SimSpec.of(env, layout, nav, tiny_tasks(rng, layout, tasks))
-    return spec.build(), int(rng.integers(2**31))
+    return build_sim(spec), int(rng.integers(2**31))
 
 
 @pytest.mark.parametrize(

@@ -18,11 +18,11 @@ from rtaw_marl.policies import (
     RandomPolicy,
     make_baseline,
 )
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import EuclideanDistance
 from rtaw_marl.sim.layout import open_grid
-from rtaw_marl.sim.navigation import DirectNavigator
 from rtaw_marl.sim.tasks import FixedTasks
 
 #: The two observation-path settings: (navigator, layout spec).
@@ -47,18 +47,20 @@ def run_sim(sim: WarehouseSim, policy: BaselinePolicy, seed: int) -> tuple[list[
 
 def two_task_sim(num_tasks: int = 500) -> WarehouseSim:
     """The paper's two-task setting: 10 robots, 10x10 open grid, direct, paper mode."""
-    return SimSpec.of(
-        {"num_robots": 10, "num_tasks": num_tasks, "queue_len": 2, "episode_mode": "paper"},
-        {"name": "open", "width": 10, "height": 10},
-        "direct",
-        "two_task",
-    ).build()
+    return build_sim(
+        SimSpec.of(
+            {"num_robots": 10, "num_tasks": num_tasks, "queue_len": 2, "episode_mode": "paper"},
+            {"name": "open", "width": 10, "height": 10},
+            "direct",
+            "two_task",
+        )
+    )
 
 
 def random_sim(navigator: str, layout: dict[str, Any], **env: Any) -> WarehouseSim:
     values: dict[str, Any] = {"num_robots": 4, "num_tasks": 60, "queue_len": 5}
     values.update(env)
-    return SimSpec.of(values, layout, navigator, "random").build()
+    return build_sim(SimSpec.of(values, layout, navigator, "random"))
 
 
 # ----------------------------------------------------------------- MPDM
@@ -115,7 +117,7 @@ def _three_robot_sim(
         robot_starts=starts,
         robot_free_times=(0.0, 1.0, 1.0),
     )
-    return WarehouseSim(config, layout, DirectNavigator(layout), FixedTasks(tasks))
+    return WarehouseSim(config, layout, EuclideanDistance(layout), FixedTasks(tasks))
 
 
 HAND_STARTS = ((0, 0), (2, 0), (9, 9))
@@ -309,7 +311,7 @@ def test_make_baseline() -> None:
     """make_baseline builds each registered rule with its navigator and scale; an unknown name
     lists mpdm, random and rbts."""
     assert {"mpdm", "rbts", "random"} <= set(BASELINES)
-    nav = DirectNavigator(open_grid(4, 4))
+    nav = EuclideanDistance(open_grid(4, 4))
     for name, cls in (("mpdm", MPDM), ("rbts", RBTS), ("random", RandomPolicy)):
         policy = make_baseline(name, navigator=nav, scale=4.0)
         assert type(policy) is cls

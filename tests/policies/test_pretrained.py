@@ -12,7 +12,7 @@ from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.policies.pretrained import registry
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
@@ -34,12 +34,14 @@ def test_pretrained_checkpoint_is_shipped_and_describes_itself(name: str) -> Non
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
 def test_pretrained_policy_runs_on_other_sizes(name: str) -> None:
     """Trained with 10 robots and 10 slots; runs with 30 robots and 4 slots on another grid."""
-    sim = SimSpec.of(
-        {"num_robots": 30, "num_tasks": 60, "queue_len": 4},
-        {"name": "preset", "preset": "C", "width": 40, "height": 30},
-        "astar",
-        "random",
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 30, "num_tasks": 60, "queue_len": 4},
+            {"name": "preset", "preset": "C", "width": 40, "height": 30},
+            "astar",
+            "random",
+        )
+    )
     res = evaluate(sim, {"rtaw": load_policy(pretrained_path(name))}, [0])
     assert res["rtaw"]["tasks_served"] == [60]
 
@@ -53,7 +55,7 @@ def test_first_release_rtaw_checkpoint_still_loads_and_evaluates() -> None:
     policy = load_policy(old)
     assert policy.net.in_keys == ("robots", "tasks", "agent", "action_mask")
     layout = {"name": "preset", "preset": "A"}
-    sim = SimSpec.of({"num_robots": 10, "num_tasks": 50}, layout, "astar", "designated").build()
+    sim = build_sim(SimSpec.of({"num_robots": 10, "num_tasks": 50}, layout, "astar", "designated"))
     res = evaluate(sim, {"old": policy}, [0, 1])
     assert res["old"]["tasks_served"] == [50, 50]
 

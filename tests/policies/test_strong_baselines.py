@@ -19,7 +19,7 @@ from rtaw_marl.policies import (
     make_baseline,
 )
 from rtaw_marl.policies.lookahead import lookahead_costs
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from tests.policies.test_baselines import SETTINGS, random_sim, run_sim, two_task_sim
 
@@ -174,7 +174,7 @@ def test_hindsight_horizon_zero_is_greedy() -> None:
 
 def test_hindsight_and_lookahead_beat_mpdm_on_the_default_scenario() -> None:
     """The outcome the issue asks for, on 3 evaluation seeds (docs/results.md has 20)."""
-    sim = SimSpec.of({"num_tasks": 200}).build()
+    sim = build_sim(SimSpec.of({"num_tasks": 200}))
     policies = {n: make_baseline(n, sim.navigator) for n in ("mpdm", "lookahead", "hindsight")}
     res = evaluate(sim, policies, [0, 1, 2])
     mpdm, look, hind = (np.mean(res[n]["ttd"]) for n in ("mpdm", "lookahead", "hindsight"))
@@ -184,8 +184,8 @@ def test_hindsight_and_lookahead_beat_mpdm_on_the_default_scenario() -> None:
 def test_hindsight_with_collision_aware_execution() -> None:
     """With SIPP the rollout uses A* distances without waits; episodes still validate."""
     env = {"num_robots": 5, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 0.0}
-    sim = SimSpec.of(env, {"name": "preset", "preset": "A", "width": 30, "height": 30},
-                     "sipp", "random").build()  # fmt: skip
+    sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": "A", "width": 30, "height": 30},
+                     "sipp", "random"))  # fmt: skip
     res = evaluate(sim, {"hindsight": Hindsight(5), "mpdm": MPDM()}, [0])
     assert res["hindsight"]["tasks_served"] == [20]
 

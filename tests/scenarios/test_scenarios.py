@@ -10,7 +10,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.pretrained.registry import PRETRAINED
 from rtaw_marl.scenarios import EVAL_SEEDS, ROWS, SCENARIOS, scenario
 from rtaw_marl.scenarios.configs import expected_files
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 
 
 def test_generated_configs_match_the_registry() -> None:
@@ -85,3 +85,24 @@ def test_with_env_changes_only_what_it_is_given() -> None:
     assert paper.spec().env.episode_mode == "paper"
     assert paper.spec().env.num_robots == 10
     assert base.spec().env.episode_mode == "drain"
+
+
+@pytest.mark.parametrize("name", ["C_astar_m10", "poc", "open300_direct_m100_random"])
+def test_the_env_takes_a_scenario_name(name: str) -> None:
+    from rtaw_marl import warehouse_v1
+
+    env = warehouse_v1.env(scenario=name)
+    assert env.unwrapped.sim.config == SCENARIOS[name].spec().env
+    assert (
+        env.unwrapped.sim.layout.describe() == build_sim(SCENARIOS[name].spec()).layout.describe()
+    )
+    # Arguments given beside it win, as command-line overrides beat scenario=NAME.
+    assert warehouse_v1.env(scenario=name, num_tasks=3).unwrapped.sim.config.num_tasks == 3
+
+
+def test_the_env_and_the_command_line_mean_the_same_layout_c() -> None:
+    from rtaw_marl import warehouse_v1
+
+    env = warehouse_v1.env(layout="C")
+    hydra = to_typed(compose(config_name="eval", overrides=["layout=C"])).sim_spec()
+    assert env.unwrapped.sim.layout.describe() == build_sim(hydra).layout.describe()

@@ -9,8 +9,8 @@ import pytest
 
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import EuclideanDistance
 from rtaw_marl.sim.layout import open_grid
-from rtaw_marl.sim.navigation import DirectNavigator
 from rtaw_marl.sim.tasks import POC_TASKS, FixedTasks
 
 #: Real warehouse maps kept next to the repository (never copied into it).
@@ -45,6 +45,6 @@ def poc_sim() -> Callable[..., WarehouseSim]:
         values.update(overrides)
         layout = open_grid(10, 10)
         config = SimConfig(**values)  # type: ignore[arg-type]
-        return WarehouseSim(config, layout, DirectNavigator(layout), FixedTasks(POC_TASKS))
+        return WarehouseSim(config, layout, EuclideanDistance(layout), FixedTasks(POC_TASKS))
 
     return make

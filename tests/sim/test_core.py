@@ -12,11 +12,11 @@ import pytest
 from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS, RandomPolicy
 from rtaw_marl.policies.baselines import BaselinePolicy
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import EuclideanDistance, GridDistance
 from rtaw_marl.sim.layout import Layout, open_grid
-from rtaw_marl.sim.navigation import AStarNavigator, DirectNavigator
 from rtaw_marl.sim.tasks import TWO_TASKS, FixedTasks, RandomTasks
 
 SQRT18 = math.sqrt(18.0)
@@ -38,9 +38,9 @@ def small_sim(**overrides: object) -> WarehouseSim:
     """A 3-robot, 30-task random-task episode on a 12x12 open grid with the direct navigator."""
     values: dict[str, object] = {"num_robots": 3, "num_tasks": 30, "queue_len": 4}
     values.update(overrides)
-    return SimSpec.of(
-        values, {"name": "open", "width": 12, "height": 12}, "direct", "random"
-    ).build()
+    return build_sim(
+        SimSpec.of(values, {"name": "open", "width": 12, "height": 12}, "direct", "random")
+    )
 
 
 # ----------------------------------------------------------------- the paper's PoC
@@ -174,12 +174,14 @@ def test_two_task_setting_always_task_a() -> None:
     """Two-task setting (paper mode, 10 robots, 10x10, direct): the queue always holds tasks
     A and B; always picking A costs each robot its start -> (0,0) once, then sqrt(18) each
     time, i.e. about 500*sqrt(18)."""
-    sim = SimSpec.of(
-        {"num_robots": 10, "num_tasks": 500, "queue_len": 2, "episode_mode": "paper"},
-        {"name": "open", "width": 10, "height": 10},
-        "direct",
-        "two_task",
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 10, "num_tasks": 500, "queue_len": 2, "episode_mode": "paper"},
+            {"name": "open", "width": 10, "height": 10},
+            "direct",
+            "two_task",
+        )
+    )
     sim.reset(5)
     total = 0.0
     while not sim.done:
@@ -199,7 +201,7 @@ def test_two_task_setting_always_task_a() -> None:
 def test_two_task_needs_queue_of_two() -> None:
     """The two-task stream refills each slot with its own task, so queue_len must be 2."""
     with pytest.raises(ConfigError, match="queue_len must be 2"):
-        SimSpec.of({"num_robots": 2, "queue_len": 3}, "open", "direct", "two_task").build()
+        build_sim(SimSpec.of({"num_robots": 2, "queue_len": 3}, "open", "direct", "two_task"))
 
 
 # ----------------------------------------------------------------- invalid input
@@ -280,16 +282,16 @@ def test_sim_construction_errors() -> None:
     """Mismatched navigator, too many robots, unknown env keys and blocked starts are errors."""
     layout = open_grid(3, 3)
     with pytest.raises(ConfigError, match="different layout"):
-        WarehouseSim(SimConfig(), layout, DirectNavigator(open_grid(3, 3)), RandomTasks())
+        WarehouseSim(SimConfig(), layout, EuclideanDistance(open_grid(3, 3)), RandomTasks())
     with pytest.raises(ConfigError, match="num_robots=10 exceeds the 9 free cells"):
-        WarehouseSim(SimConfig(), layout, DirectNavigator(layout), RandomTasks())
+        WarehouseSim(SimConfig(), layout, EuclideanDistance(layout), RandomTasks())
     with pytest.raises(ConfigError, match=r"unknown key env\.robots; valid keys: num_robots"):
-        SimSpec.of({"robots": 3}, "open", "direct", "random").build()
+        build_sim(SimSpec.of({"robots": 3}, "open", "direct", "random"))
     grid = np.zeros((4, 4), dtype=bool)
     grid[1, 1] = True
     blocked = Layout(grid)
     config = SimConfig(num_robots=1, num_tasks=3, robot_starts=((1, 1),))
-    sim = WarehouseSim(config, blocked, DirectNavigator(blocked), RandomTasks())
+    sim = WarehouseSim(config, blocked, EuclideanDistance(blocked), RandomTasks())
     with pytest.raises(LayoutError, match=r"start of robot 0 at \(x=1, y=1\) is on an obstacle"):
         sim.reset(0)
 
@@ -300,7 +302,7 @@ def test_unreachable_tasks_rejected_at_reset() -> None:
     layout = Layout(grid)
     config = SimConfig(num_robots=1, num_tasks=1, queue_len=1, robot_starts=((4, 0),))
     tasks = FixedTasks([(0, 0, 1, 1)])
-    sim = WarehouseSim(config, layout, AStarNavigator(layout), tasks)
+    sim = WarehouseSim(config, layout, GridDistance(layout), tasks)
     with pytest.raises(LayoutError, match="different connected regions"):
         sim.reset(0)
 
@@ -469,12 +471,14 @@ def test_idle_is_non_negative_with_default_noise() -> None:
 def test_scale_thousand_robots() -> None:
     """1000 robots and 2000 tasks on a 128x128 open grid with A* and MPDM: every task served
     exactly once and each TTD equals the Manhattan distance (smoke test, no timing)."""
-    sim = SimSpec.of(
-        {"num_robots": 1000, "num_tasks": 2000},
-        {"name": "open", "width": 128, "height": 128},
-        "astar",
-        "random",
-    ).build()
+    sim = build_sim(
+        SimSpec.of(
+            {"num_robots": 1000, "num_tasks": 2000},
+            {"name": "open", "width": 128, "height": 128},
+            "astar",
+            "random",
+        )
+    )
     run(sim, MPDM(), 0)
     metrics = sim.metrics()
     assert sim.done

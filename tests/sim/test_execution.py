@@ -13,11 +13,11 @@ import pytest
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import GridDistance
 from rtaw_marl.sim.execution import InstantTravel
-from rtaw_marl.sim.navigation import AStarNavigator
 from rtaw_marl.sim.options import ShelvesLayoutConfig
 from rtaw_marl.sim.tasks import RandomTasks
 
@@ -64,7 +64,7 @@ def play_mpdm(sim: WarehouseSim, seed: int) -> tuple[list[str], str]:
 def test_episodes_match_the_recorded_simulator(
     navigator: str, env: dict, layout: object, seed: int, metrics: list[str], trace: str
 ) -> None:
-    sim = SimSpec.of(env, layout, navigator, "designated").build()
+    sim = build_sim(SimSpec.of(env, layout, navigator, "designated"))
     assert play_mpdm(sim, seed) == (metrics, trace)
 
 
@@ -78,9 +78,9 @@ def test_episodes_match_the_recorded_simulator(
 def test_collision_aware_schedules_match_the_recorded_fleets(
     navigator: str, positions: str, stats: tuple[float, ...]
 ) -> None:
-    sim = SimSpec.of(
-        {"num_robots": 10, "num_tasks": 40, **NOISELESS}, C, navigator, "designated"
-    ).build()
+    sim = build_sim(
+        SimSpec.of({"num_robots": 10, "num_tasks": 40, **NOISELESS}, C, navigator, "designated")
+    )
     play_mpdm(sim, 3)
     assert digest(sim.schedule().positions.astype(np.int64)) == positions
     counters = sim.executor.stats()
@@ -94,7 +94,7 @@ def test_instant_travel_is_the_default() -> None:
     config = SimConfig(num_robots=5, num_tasks=30)
     runs = []
     for executor in (None, InstantTravel()):
-        sim = WarehouseSim(config, layout, AStarNavigator(layout), RandomTasks(),
+        sim = WarehouseSim(config, layout, GridDistance(layout), RandomTasks(),
                            executor=executor)  # fmt: skip
         runs.append(play_mpdm(sim, 7))
         assert isinstance(sim.executor, InstantTravel)
@@ -109,7 +109,7 @@ def test_instant_travel_noise_never_finishes_before_the_decision() -> None:
     """A noise draw below minus the travel time is clipped at the decision time (the mean
     must be >= 0, but single draws of a wide noise still fall that low)."""
     env = {"num_robots": 3, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 10_000.0}
-    sim = SimSpec.of(env, {"name": "open", "width": 8, "height": 8}, "direct", "random").build()
+    sim = build_sim(SimSpec.of(env, {"name": "open", "width": 8, "height": 8}, "direct", "random"))
     sim.reset(0)
     while not sim.done:
         sim.step(int(np.flatnonzero(sim.queue_mask)[0]))

@@ -20,13 +20,13 @@ from abc import abstractmethod
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError
+from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.fleet import Fleet
 from rtaw_marl.sim.mapf.grid import Grid
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.sim.mapf.strategies import CBSFleet, SIPPFleet
-from rtaw_marl.sim.navigation import Navigator
 
 __all__ = ["CBSExecutor", "FleetExecutor", "SIPPExecutor"]
 
@@ -59,7 +59,7 @@ class FleetExecutor(Executor):
             raise ConfigError(f"executor {self.name!r} is not bound to a simulator")
         return self._fleet
 
-    def bind(self, config: SimSettings, layout: Layout, navigator: Navigator) -> None:
+    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
         del navigator  # planners use the grid; the policy keeps the navigator's distances
         if self._fleet is not None:
             raise ConfigError(

@@ -5,7 +5,7 @@ Each dataclass is the schema of one Hydra option (``layout=shelves``, ``navigato
 here once. The YAML twins in ``rtaw_marl/conf/`` only point at these schemas
 (:mod:`rtaw_marl.config.store` registers them), and plain Python code builds the same
 objects by name (:func:`layout_option` and friends). Every option builds its part:
-``LayoutOption.build() -> Layout``, ``NavigatorOption.navigator(layout) -> Navigator``
+``LayoutOption.build() -> Layout``, ``NavigatorOption.distance_model(layout) -> DistanceModel``
 plus ``NavigatorOption.executor()`` (``None``: robots travel independently),
 ``TaskOption.build() -> TaskStream``.
 

@@ -1,4 +1,4 @@
-"""Navigator options (the ``navigator`` config group): the distance model the policies
+"""DistanceModel options (the ``navigator`` config group): the distance model the policies
 observe, and the executor that moves the robots."""
 
 from __future__ import annotations
@@ -9,10 +9,10 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.distances import DistanceModel, EuclideanDistance, GridDistance
 from rtaw_marl.sim.execution import Executor
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf import CBSExecutor, SIPPExecutor
-from rtaw_marl.sim.navigation import AStarNavigator, DirectNavigator, Navigator
 from rtaw_marl.sim.options.base import Option
 
 __all__ = [
@@ -39,9 +39,9 @@ class NavigatorOption(Option):
     #: block): ``SimSpec.of(navigator="sipp")`` and ``navigator=sipp`` build the same.
     env_defaults: ClassVar[Mapping[str, float]] = MappingProxyType({})
 
-    def navigator(self, layout: Layout) -> Navigator:
+    def distance_model(self, layout: Layout) -> DistanceModel:
         """The distance model on ``layout`` (shared by every simulator of a batch)."""
-        return AStarNavigator(layout)
+        return GridDistance(layout)
 
     def executor(self) -> Executor | None:
         """A fresh executor for one simulator; ``None`` means instant, independent travel."""
@@ -54,8 +54,8 @@ class DirectConfig(NavigatorOption):
 
     name: str = "direct"
 
-    def navigator(self, layout: Layout) -> Navigator:
-        return DirectNavigator(layout)
+    def distance_model(self, layout: Layout) -> DistanceModel:
+        return EuclideanDistance(layout)
 
 
 @dataclass(kw_only=True)

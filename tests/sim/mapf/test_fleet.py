@@ -14,12 +14,12 @@ from hypothesis import strategies as st
 from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError, PlanningTimeout
 from rtaw_marl.evaluation.evaluate import run_episode
 from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec
+from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.distances import GridDistance
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.mapf import CBSExecutor, Schedule, SIPPExecutor, check_schedule
-from rtaw_marl.sim.navigation import AStarNavigator
 from rtaw_marl.sim.options import navigator_option
 from rtaw_marl.sim.tasks import FixedTasks
 
@@ -46,7 +46,7 @@ def play(
         noise_var=0.0, robot_starts=tuple(starts), **env,
     )  # fmt: skip
     option = navigator_option(navigator)
-    sim = WarehouseSim(config, layout, option.navigator(layout), FixedTasks(tasks),
+    sim = WarehouseSim(config, layout, option.distance_model(layout), FixedTasks(tasks),
                        executor=option.executor())  # fmt: skip
     sim.reset(0)
     for i in range(len(tasks)):
@@ -146,7 +146,7 @@ def test_config_errors(nav: str) -> None:
     """Completion noise, fractional start times and a bad time limit are refused."""
     layout = open_grid(4, 4)
     tasks = FixedTasks([(0, 0, 1, 1)])
-    astar = AStarNavigator(layout)
+    astar = GridDistance(layout)
     with pytest.raises(ConfigError, match=rf"navigator '{nav}' .*env.noise_mean=0 env.noise_var=0"):
         WarehouseSim(SimConfig(num_robots=1, num_tasks=1), layout, astar, tasks,
                      executor=navigator_option(nav).executor())  # fmt: skip
@@ -161,7 +161,7 @@ def test_config_errors(nav: str) -> None:
             navigator_option({"name": nav, "time_limit": bad})
     with pytest.raises(ConfigError, match=r"unknown key navigator\.timelimit"):
         navigator_option({"name": nav, "timelimit": 3})
-    sim = SimSpec.of({"num_robots": 1, "num_tasks": 1}, layout, "astar", tasks).build()
+    sim = build_sim(SimSpec.of({"num_robots": 1, "num_tasks": 1}, layout, "astar", tasks))
     with pytest.raises(ConfigError, match=r"'astar' moves robots independently.*navigator=sipp"):
         sim.schedule()
 
@@ -179,27 +179,27 @@ def test_executor_parameters_are_explicit_and_checked() -> None:
     config = SimConfig(num_robots=1, num_tasks=1, noise_mean=0, noise_var=0)
     executor = SIPPExecutor(time_limit=1.0)
     assert (executor.name, executor.collision_aware) == ("sipp", True)
-    sim = WarehouseSim(config, layout, AStarNavigator(layout), FixedTasks([(0, 0, 1, 1)]),
+    sim = WarehouseSim(config, layout, GridDistance(layout), FixedTasks([(0, 0, 1, 1)]),
                        executor=executor)  # fmt: skip
     with pytest.raises(InvalidActionError, match="only when the episode is done"):
         sim.schedule()
     with pytest.raises(ConfigError, match="already belongs to a simulator"):
-        WarehouseSim(config, layout, AStarNavigator(layout), FixedTasks([(0, 0, 1, 1)]),
+        WarehouseSim(config, layout, GridDistance(layout), FixedTasks([(0, 0, 1, 1)]),
                      executor=executor)  # fmt: skip
 
 
 def test_registry_builds_astar_plus_the_executor_with_its_parameters() -> None:
     """``sipp``/``cbs`` specs: an A* navigator and the executor with exactly the values given."""
     env = {"num_robots": 2, "num_tasks": 2, "noise_mean": 0.0, "noise_var": 0.0}
-    sim = SimSpec.of(
-        env, "open", {"name": "cbs", "time_limit": 1.5, "max_nodes": 7}, "random"
-    ).build()
-    assert isinstance(sim.navigator, AStarNavigator)
+    sim = build_sim(
+        SimSpec.of(env, "open", {"name": "cbs", "time_limit": 1.5, "max_nodes": 7}, "random")
+    )
+    assert isinstance(sim.navigator, GridDistance)
     assert isinstance(sim.executor, CBSExecutor)
     assert (sim.executor.time_limit, sim.executor.max_nodes) == (1.5, 7)
     assert sim.executor.fleet.max_nodes == 7
-    sim = SimSpec.of(env, "open", "sipp", "random").build()
-    assert isinstance(sim.navigator, AStarNavigator)
+    sim = build_sim(SimSpec.of(env, "open", "sipp", "random"))
+    assert isinstance(sim.navigator, GridDistance)
     assert isinstance(sim.executor, SIPPExecutor)
     assert sim.executor.time_limit == 10.0
     defaults = navigator_option("cbs").executor()
@@ -226,7 +226,7 @@ def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> No
     env = {"num_robots": 10, "num_tasks": 40, "noise_mean": 0.0, "noise_var": 0.0}
     runs = []
     for _ in range(2):
-        sim = SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated").build()
+        sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated"))
         run_episode(sim, make_baseline("mpdm"), seed=3)
         schedule = sim.schedule()
         check_schedule(sim.layout, schedule, expected_tasks=40)
@@ -239,7 +239,7 @@ def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> No
     assert sim.metrics().ttd == pytest.approx(float(a.task_ttd.sum()))
     assert sim.metrics().makespan == pytest.approx(float(a.task_delivered.max()))
     # Waits only ever add to the single-robot distances.
-    astar = navigator_option("astar").navigator(sim.layout)
+    astar = navigator_option("astar").distance_model(sim.layout)
     starts = a.positions[a.task_assigned, a.task_robot]
     assert (a.task_ttd >= astar.distance(starts, a.tasks[:, :2])).all()
 
@@ -299,7 +299,7 @@ def test_all_robots_blocked_is_a_planning_error_not_infinite_time() -> None:
     env = {"num_robots": 3, "num_tasks": 5, "queue_len": 3, "noise_mean": 0, "noise_var": 0,
            "robot_starts": [[1, 0], [2, 1], [0, 1]], "robot_free_times": [0, 3, 2]}  # fmt: skip
     tasks = FixedTasks([[0, 1, 1, 1], [2, 0, 2, 1], [0, 0, 2, 0], [0, 1, 1, 1], [2, 0, 2, 1]])
-    sim = SimSpec.of(env, {"name": "open", "width": 3, "height": 2}, "sipp", tasks).build()
+    sim = build_sim(SimSpec.of(env, {"name": "open", "width": 3, "height": 2}, "sipp", tasks))
     sim.reset(0)
     for action in [1, 0, 2, 0]:
         sim.step(action)

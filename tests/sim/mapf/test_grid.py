@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from rtaw_marl.errors import LayoutError
+from rtaw_marl.sim.distances import GridDistance
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf import Grid
-from rtaw_marl.sim.navigation import AStarNavigator
 from rtaw_marl.sim.options import ShelvesLayoutConfig
 
 ROWS = ("..@..", ".@@..", ".....")
@@ -51,7 +51,7 @@ def test_neighbours_are_free_and_ordered_right_left_down_up() -> None:
 
 def test_fields_match_the_astar_navigator() -> None:
     layout = ShelvesLayoutConfig(width=20, height=14).build()
-    grid, nav = Grid.from_layout(layout), AStarNavigator(layout)
+    grid, nav = Grid.from_layout(layout), GridDistance(layout)
     cells = layout.free_cells[::7]
     for x, y in cells[:10].tolist():
         expected = nav.field(x, y).reshape(layout.height + 2, layout.width + 2)[1:-1, 1:-1]

@@ -1,24 +1,26 @@
-"""Navigators: travel distances between cells of a layout.
+"""Distance models: travel distances between cells of a layout.
 
-A navigator answers two questions for the simulator:
+A ``navigator=`` option is a distance model (the distances the policies observe, here)
+plus an executor (how assigned robots travel: :mod:`rtaw_marl.sim.execution`). A
+distance model answers two questions for the simulator:
 
-* the distance between pairs or sets of cells (:meth:`Navigator.distance`,
-  :meth:`Navigator.distance_matrix`), and
+* the distance between pairs or sets of cells (:meth:`DistanceModel.distance`,
+  :meth:`DistanceModel.distance_matrix`), and
 * the distances from any robot cells to the ``N`` task origins currently queued,
   through a mutable :class:`TargetSlots` object kept in step with the queue. This is
   the per-decision hot path: one gather, no Python loop over robots.
 
 Robots move one cell per second, so distances are travel times in seconds.
 
-``direct``
+``direct``: :class:`EuclideanDistance`
     Euclidean distance, obstacles ignored (the paper's "Direct" navigation).
-``astar``
+``astar``: :class:`GridDistance`
     True 4-connected shortest paths. Distances come from per-target BFS distance
     fields (a BFS from the target is an A* with the exact heuristic) computed by a
     small compiled kernel and kept in an LRU cache; paths are recovered by descending
     the field. A pair of cells in different connected regions is an error.
 
-Navigators are distance models only. How robots then travel (independently, or on a
+How robots then travel (independently, or on a
 shared grid where they wait for each other: ``sipp``, ``cbs``, which measure distances
 with ``astar``) is the simulator's :class:`~rtaw_marl.sim.execution.Executor`.
 """
@@ -35,7 +37,7 @@ from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim._bfs import bfs_fields
 from rtaw_marl.sim.layout import Layout
 
-__all__ = ["AStarNavigator", "DirectNavigator", "Navigator", "TargetSlots"]
+__all__ = ["DistanceModel", "EuclideanDistance", "GridDistance", "TargetSlots"]
 
 
 class TargetSlots(ABC):
@@ -61,7 +63,7 @@ class TargetSlots(ABC):
         """Distance from cell ``(x, y)`` to the target of ``slot``."""
 
 
-class Navigator(ABC):
+class DistanceModel(ABC):
     """Travel distances on one layout."""
 
     name: str = ""
@@ -98,7 +100,7 @@ class Navigator(ABC):
         del cells, what
 
 
-class DirectNavigator(Navigator):
+class EuclideanDistance(DistanceModel):
     """Euclidean distances; obstacles are ignored (the paper's "Direct" setting)."""
 
     name = "direct"
@@ -141,7 +143,7 @@ class _DirectSlots(TargetSlots):
         return float(np.hypot(x - self._xy[slot, 0], y - self._xy[slot, 1]))
 
 
-class AStarNavigator(Navigator):
+class GridDistance(DistanceModel):
     """4-connected shortest paths from cached per-target BFS distance fields.
 
     Fields live on the grid padded by one blocked border cell, so the BFS kernel needs
@@ -280,7 +282,7 @@ class AStarNavigator(Navigator):
 class _FieldSlots(TargetSlots):
     """Slot targets as a dense ``[N, cells]`` copy of their fields, so a query is one gather."""
 
-    def __init__(self, navigator: AStarNavigator, size: int) -> None:
+    def __init__(self, navigator: GridDistance, size: int) -> None:
         super().__init__(size)
         self._nav = navigator
         self._fields = np.zeros((size, navigator._free_padded.size), dtype=np.int32)

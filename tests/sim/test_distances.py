@@ -11,13 +11,13 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from rtaw_marl.errors import ConfigError, LayoutError
-from rtaw_marl.sim.layout import Layout, open_grid
-from rtaw_marl.sim.navigation import (
-    AStarNavigator,
-    DirectNavigator,
-    Navigator,
+from rtaw_marl.sim.distances import (
+    DistanceModel,
+    EuclideanDistance,
+    GridDistance,
     TargetSlots,
 )
+from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.options import ShelvesLayoutConfig, navigator_option
 
 FAST = settings(max_examples=30, deadline=None, database=None)
@@ -68,7 +68,7 @@ def _assert_valid_path(layout: Layout, path: np.ndarray, a: tuple[int, int], b: 
 @given(arrays(np.int64, (6, 4), elements=st.integers(-50, 50)))
 def test_direct_distance_is_hypot(xy: np.ndarray) -> None:
     """Direct distances (row-wise and matrix) are the Euclidean hypot, obstacles ignored."""
-    nav = DirectNavigator(ShelvesLayoutConfig(width=20, height=20).build())
+    nav = EuclideanDistance(ShelvesLayoutConfig(width=20, height=20).build())
     a, b = xy[:, :2], xy[:, 2:]
     expected = [np.hypot(*(p - q)) for p, q in zip(a, b, strict=True)]
     np.testing.assert_allclose(nav.distance(a, b), expected, rtol=1e-12)
@@ -81,7 +81,7 @@ def test_direct_distance_is_hypot(xy: np.ndarray) -> None:
 
 def test_direct_path_and_connectivity() -> None:
     """A direct path is the straight segment's two ends; split regions are never an error."""
-    nav = DirectNavigator(Layout(TWO_REGIONS))
+    nav = EuclideanDistance(Layout(TWO_REGIONS))
     assert nav.path((0, 0), (5, 2)).tolist() == [[0, 0], [5, 2]]
     nav.check_connected(np.array([[0, 0], [5, 2]]), "cell")
     assert nav.distance(np.array([[0, 0]]), np.array([[5, 2]]))[0] == pytest.approx(np.hypot(5, 2))
@@ -95,7 +95,7 @@ def test_direct_path_and_connectivity() -> None:
 def test_astar_matches_plain_bfs(layout: Layout) -> None:
     """A* distances equal a plain BFS on random grids, are symmetric, and its paths are valid
     4-connected free-cell paths with distance + 1 cells; unreachable pairs raise LayoutError."""
-    nav = AStarNavigator(layout)
+    nav = GridDistance(layout)
     cells = [tuple(c) for c in layout.free_cells.tolist()]
     fields = {c: bfs(layout.obstacles, c) for c in cells}
     reach_a, reach_b, expected, unreachable = [], [], [], []
@@ -132,7 +132,7 @@ def test_astar_matches_plain_bfs(layout: Layout) -> None:
 @given(small_layouts())
 def test_astar_distance_matrix_matches_distance(layout: Layout) -> None:
     """distance_matrix over the main region equals pairwise distance() and the BFS."""
-    nav = AStarNavigator(layout)
+    nav = GridDistance(layout)
     cells = layout.main_cells
     matrix = nav.distance_matrix(cells, cells)
     assert matrix.shape == (len(cells), len(cells))
@@ -147,7 +147,7 @@ def test_astar_distance_matrix_matches_distance(layout: Layout) -> None:
 def test_astar_open_grid_is_manhattan() -> None:
     """On an obstacle-free grid the 4-connected distance is the Manhattan distance."""
     layout = open_grid(9, 6)
-    nav = AStarNavigator(layout)
+    nav = GridDistance(layout)
     cells = layout.free_cells
     expected = np.abs(cells[:, None, :] - cells[None, :, :]).sum(axis=2)
     np.testing.assert_array_equal(nav.distance_matrix(cells, cells), expected)
@@ -159,9 +159,9 @@ def test_astar_detours_around_shelves() -> None:
     grid[0:4, 2] = True  # wall at x=2 with a gap only at the bottom row
     layout = Layout(grid)
     a, b = np.array([[0, 0]]), np.array([[4, 0]])
-    assert AStarNavigator(layout).distance(a, b)[0] == 4 + 2 * 4
-    assert DirectNavigator(layout).distance(a, b)[0] == 4
-    path = AStarNavigator(layout).path((0, 0), (4, 0))
+    assert GridDistance(layout).distance(a, b)[0] == 4 + 2 * 4
+    assert EuclideanDistance(layout).distance(a, b)[0] == 4
+    path = GridDistance(layout).path((0, 0), (4, 0))
     _assert_valid_path(layout, path, (0, 0), (4, 0))
     assert [2, 4] in path.tolist()
 
@@ -176,7 +176,7 @@ def test_target_slots_match_distance_matrix(nav_name: str) -> None:
     layout = ShelvesLayoutConfig(
         width=24, height=18, shelf_width=4, shelf_height=2, aisle=2, margin=2
     ).build()
-    nav: Navigator = navigator_option(nav_name).navigator(layout)
+    nav: DistanceModel = navigator_option(nav_name).distance_model(layout)
     rng = np.random.default_rng(7)
     cells = layout.main_cells
     targets = cells[rng.choice(len(cells), size=4, replace=False)]
@@ -206,7 +206,7 @@ def test_target_slots_match_distance_matrix(nav_name: str) -> None:
 def test_field_slots_unreachable_raise() -> None:
     """An A* slot whose target lies in another region raises LayoutError from distance_to."""
     layout = Layout(TWO_REGIONS)
-    slots = AStarNavigator(layout).target_slots(1)
+    slots = GridDistance(layout).target_slots(1)
     slots.set(0, 5, 1)
     assert slots.distance_to(0, 3, 0) == 3.0
     with pytest.raises(LayoutError, match="no path"):
@@ -219,7 +219,7 @@ def test_field_slots_unreachable_raise() -> None:
 def test_unreachable_pairs_raise() -> None:
     """On a two-region grid, A* distance, distance_matrix and check_connected raise LayoutError."""
     layout = Layout(TWO_REGIONS, name="split")
-    nav = AStarNavigator(layout)
+    nav = GridDistance(layout)
     left, right = np.array([[0, 1]]), np.array([[4, 2]])
     with pytest.raises(LayoutError, match=r"no path from \(x=0, y=1\) to \(x=4, y=2\).*'split'"):
         nav.distance(left, right)
@@ -234,13 +234,13 @@ def test_unreachable_pairs_raise() -> None:
 def test_make_navigator() -> None:
     """make_navigator builds the named class; an unknown name lists the registered ones."""
     layout = open_grid(4, 4)
-    assert isinstance(navigator_option("astar").navigator(layout), AStarNavigator)
-    assert isinstance(navigator_option("direct").navigator(layout), DirectNavigator)
-    assert navigator_option("direct").navigator(layout).layout is layout
+    assert isinstance(navigator_option("astar").distance_model(layout), GridDistance)
+    assert isinstance(navigator_option("direct").distance_model(layout), EuclideanDistance)
+    assert navigator_option("direct").distance_model(layout).layout is layout
     with pytest.raises(
         ConfigError, match=r"unknown navigator 'dijkstra'.*astar, cbs, direct, sipp"
     ):
-        navigator_option("dijkstra").navigator(layout)
+        navigator_option("dijkstra").distance_model(layout)
 
 
 # ----------------------------------------------------------------- cache
@@ -252,7 +252,7 @@ def test_lru_eviction_keeps_answers_right() -> None:
     layout = ShelvesLayoutConfig(
         width=16, height=14, shelf_width=3, shelf_height=2, aisle=1, margin=1
     ).build()
-    nav = AStarNavigator(layout, cache_mb=1e-9)
+    nav = GridDistance(layout, cache_mb=1e-9)
     cells = layout.main_cells
     assert len(cells) > 100
     fields = [bfs(layout.obstacles, tuple(c)) for c in cells.tolist()]
