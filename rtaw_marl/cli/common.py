@@ -183,8 +183,6 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
             )
             continue
         try:
-            import torch
-
             from rtaw_marl.policies.network import load_policy
         except ModuleNotFoundError as exc:  # an install without the train extra
             raise ConfigError(
@@ -193,12 +191,13 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
             ) from None
         from rtaw_marl.policies.pretrained.registry import pretrained_path
 
-        torch.set_num_threads(int(cfg.torch_threads))
+        threads = int(cfg.torch_threads)
         for source in sources[name]:
             if name == "checkpoint":
-                policy = load_policy(source)
+                policy = load_policy(source, torch_threads=threads)
             else:
-                policy = load_policy(pretrained_path(source), name=f"rtaw:{source}")
+                path = pretrained_path(source)  # a shipped name only, never a file
+                policy = load_policy(path, name=f"rtaw:{source}", torch_threads=threads)
             policies[policy.name] = policy
     return policies
 

@@ -4,6 +4,8 @@ default noise, and makes the same decisions."""
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -130,22 +132,17 @@ def test_load_policy_names_and_threads() -> None:
         load_policy("shelves_astar_m10_pluss")
 
 
-README = """
-from rtaw_marl import warehouse_v1
-from rtaw_marl.policies import load_policy
-env = warehouse_v1.env(num_robots=10, layout="shelves", navigator="astar")
-policy = load_policy("shelves_astar_m10_plus")   # a shipped RTAW+, or a checkpoint path
-env.reset(seed=0); policy.reset(seed=0)
-for agent in env.agent_iter():
-    obs, reward, terminated, truncated, info = env.last()
-    env.step(None if terminated or truncated else policy.act(obs))
-print(info["ttd"])
-"""
+def _readme_snippet() -> str:
+    """The README's Python block that acts with ``load_policy`` (run verbatim)."""
+    text = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    (snippet,) = [b for b in blocks if "load_policy" in b]
+    return snippet
 
 
 def test_readme_snippet(capsys: pytest.CaptureFixture[str]) -> None:
     """The README's snippet, verbatim: its TTD is the evaluation's (act_sim) for seed 0."""
-    exec(compile(README, "README.md", "exec"), {})
+    exec(compile(_readme_snippet(), "README.md", "exec"), {})
     printed = float(capsys.readouterr().out.strip())
     sim = warehouse_v1.env(num_robots=10, layout="shelves", navigator="astar").unwrapped.sim
     expected = run_episode(sim, load_policy("shelves_astar_m10_plus"), 0).ttd
