@@ -7,6 +7,11 @@ print its one-line message and exit non-zero without a traceback.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TypeVar
+
+T = TypeVar("T")
+
 
 class RtawError(Exception):
     """Base class of all user-facing errors of rtaw_marl."""
@@ -40,6 +45,18 @@ def unknown_name(kind: str, name: str, available: list[str] | tuple[str, ...]) -
         A :class:`ConfigError` to raise.
     """
     return ConfigError(f"unknown {kind} {name!r}; available: {', '.join(sorted(available))}")
+
+
+def lookup(registry: Mapping[str, T], kind: str, name: str) -> T:
+    """``registry[name]``, or the :func:`unknown_name` error listing what exists.
+
+    Raises:
+        ConfigError: ``name`` is not registered.
+    """
+    try:
+        return registry[name]
+    except KeyError:
+        raise unknown_name(kind, name, list(registry)) from None
 
 
 class PlanningError(RtawError, RuntimeError):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 
-from rtaw_marl.errors import unknown_name
+from rtaw_marl.errors import lookup
 from rtaw_marl.evaluation.analysis import ANALYSIS
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.evaluation.study import Cell, PolicyRef, Study, StudyResult, learned, rule
@@ -313,7 +313,4 @@ def study(name: str) -> Study:
     Raises:
         ConfigError: Unknown name; the message lists the registered ones.
     """
-    try:
-        return STUDIES[name]
-    except KeyError:
-        raise unknown_name("study", name, list(STUDIES)) from None
+    return lookup(STUDIES, "study", name)

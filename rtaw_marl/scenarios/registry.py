@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from rtaw_marl.errors import unknown_name
+from rtaw_marl.errors import lookup
 from rtaw_marl.sim.builder import SimSpec
 
 __all__ = ["EVAL_SEEDS", "ROWS", "SCENARIOS", "TABLE1_ROBOTS", "Scenario", "scenario"]
@@ -215,7 +215,4 @@ def scenario(name: str) -> Scenario:
     Raises:
         ConfigError: Unknown name; the message lists the registered ones.
     """
-    try:
-        return SCENARIOS[name]
-    except KeyError:
-        raise unknown_name("scenario", name, list(SCENARIOS)) from None
+    return lookup(SCENARIOS, "scenario", name)

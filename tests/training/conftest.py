@@ -5,19 +5,12 @@ from __future__ import annotations
 import pytest
 
 from rtaw_marl.config import compose, to_typed
+from rtaw_marl.scenarios import SCENARIOS
 from rtaw_marl.training.config import TrainConfig
 
-#: The paper's proof-of-concept simulator settings (appendix).
-POC_ENV = {
-    "num_robots": 2,
-    "num_tasks": 5,
-    "queue_len": 2,
-    "noise_mean": 0.0,
-    "noise_var": 0.0,
-    "robot_starts": [[2, 2], [6, 2]],
-    "robot_free_times": [0.0, 2.0],
-}
-POC_LAYOUT = {"name": "open", "width": 10, "height": 10}
+#: The paper's proof-of-concept simulator settings (appendix), from its scenario.
+POC_ENV = dict(SCENARIOS["poc"].env)
+POC_LAYOUT = dict(SCENARIOS["poc"].layout)
 
 
 #: The learning tests were calibrated with the paper's PPO table and 16 envs per worker;
