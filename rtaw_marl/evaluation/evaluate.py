@@ -17,7 +17,8 @@ _PROGRESS_EVERY = 256
 
 
 class SimPolicy(Protocol):
-    """Anything that picks a slot for the simulator's selected robot."""
+    """What evaluation needs of a :class:`rtaw_marl.policies.Policy`: its fast path on
+    the simulator (every policy has it, the ``hindsight`` reference included)."""
 
     def reset(self, seed: int | None = None) -> None: ...
 
