@@ -25,7 +25,7 @@ from rtaw_marl.envs.features import sim_observation
 from rtaw_marl.models.checkpoint import build_networks
 from rtaw_marl.models.config import RTAWConfig, RTAWPlusConfig
 from rtaw_marl.policies import MPDM
-from rtaw_marl.policies.network import SimNetworkPolicy
+from rtaw_marl.policies.network import NetworkPolicy
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 
@@ -50,7 +50,7 @@ def measure(m: int, decisions: int) -> dict[str, dict[str, float]]:
     """Median ms per decision of each phase, per model, along one MPDM episode."""
     torch.manual_seed(0)
     policies = {
-        cfg.name: SimNetworkPolicy(build_networks(cfg)[0], cfg.name)
+        cfg.name: NetworkPolicy(build_networks(cfg)[0], cfg.name)
         for cfg in (RTAWConfig(), RTAWPlusConfig())
     }
     sim, mpdm = _sim(m, decisions), MPDM()

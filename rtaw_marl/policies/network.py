@@ -25,7 +25,7 @@ from rtaw_marl.models.checkpoint import Actor, load_checkpoint, load_networks
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["NetworkPolicy", "SimNetworkPolicy", "load_policy"]
+__all__ = ["NetworkPolicy", "load_policy"]
 
 
 def load_policy(
@@ -119,7 +119,3 @@ class NetworkPolicy:
         m = torch.from_numpy(np.require(mask, bool, "CW"))
         logits = self.net(*tensors, m)
         return int(torch.where(m, logits, -torch.inf).argmax())
-
-
-#: The earlier name of :class:`NetworkPolicy`.
-SimNetworkPolicy = NetworkPolicy
