@@ -59,6 +59,11 @@ def lookup(registry: Mapping[str, T], kind: str, name: str) -> T:
         raise unknown_name(kind, name, list(registry)) from None
 
 
+class DiskFullError(RtawError, OSError):
+    """A write ran out of disk space (or quota); the message names the file and what
+    was kept (atomic writes leave the previous file whole)."""
+
+
 class PlanningError(RtawError, RuntimeError):
     """A collision-aware navigator could not complete the tasks it was given."""
 

@@ -44,7 +44,8 @@ from rtaw_marl.training.interop import (
     standardize_acting_advantage,
 )
 from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
-from rtaw_marl.utils.runs import claim_folder, deferred_interrupt
+from rtaw_marl.utils.runs import claim_folder
+from rtaw_marl.utils.signals import deferred_interrupt
 from rtaw_marl.viz.plots import plot_training_curve
 
 __all__ = ["TrainResult", "greedy_ttd", "train"]
