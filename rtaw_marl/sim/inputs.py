@@ -9,12 +9,13 @@ route it takes: an :class:`~rtaw_marl.errors.InvalidActionError` for an action, 
 from __future__ import annotations
 
 import operator
+from collections import Counter
 
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
 
-__all__ = ["seed_value", "slot_index"]
+__all__ = ["seed_list", "seed_value", "slot_index"]
 
 
 def _integer(value: object) -> int | None:
@@ -91,3 +92,34 @@ def seed_value(seed: object, name: str = "seed") -> int:
     if value is None or value < 0:
         raise ConfigError(f"{name} must be an integer >= 0, got {_describe(seed)}")
     return value
+
+
+def seed_list(seeds: object, name: str = "seeds") -> list[int]:
+    """``seeds`` as a list of distinct Python integers ``>= 0``, in their order.
+
+    A seed given twice would count one episode twice (and shrink a confidence interval
+    it does not deserve), so duplicates are an error, not merged.
+
+    Args:
+        seeds: One integer, or a sequence of them.
+        name: The config key, for the message.
+
+    Raises:
+        ConfigError: Empty, not integers, negative, or a seed given more than once.
+    """
+    items = [seeds] if _integer(seeds) is not None else seeds
+    if isinstance(items, (str, bytes)) or not hasattr(items, "__iter__"):
+        raise ConfigError(
+            f"{name} must be a non-empty list of integers >= 0, got {_describe(seeds)}"
+        )
+    values = [seed_value(s, f"{name}[{i}]") for i, s in enumerate(items)]
+    if not values:
+        raise ConfigError(f"{name} must be a non-empty list of integers >= 0, got []")
+    if len(set(values)) < len(values):
+        counts = Counter(values)
+        repeated = [f"{s} ({n} times)" for s, n in counts.items() if n > 1]
+        raise ConfigError(
+            f"{name} lists a seed more than once: {', '.join(repeated[:5])}"
+            f"{' ...' if len(repeated) > 5 else ''}; each seed is one episode, list it once"
+        )
+    return values

@@ -2,13 +2,39 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["atomic_write"]
+from rtaw_marl.errors import DiskFullError
+
+__all__ = ["DISK_FULL", "atomic_write", "disk_full_guard"]
+
+#: The errnos of a write that found no room: the disk is full, or the user's quota is.
+DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT})
+
+
+@contextmanager
+def disk_full_guard(path: str | Path, kept: str) -> Iterator[None]:
+    """Turn a full disk (or quota) while writing ``path`` into one :class:`DiskFullError`
+    line that says what was kept; other OS errors pass through.
+
+    Args:
+        path: The file being written (named in the message).
+        kept: What is intact on disk, e.g. ``"the previous last.pt is kept"``.
+    """
+    try:
+        yield
+    except OSError as exc:
+        if exc.errno not in DISK_FULL or isinstance(exc, DiskFullError):
+            raise
+        raise DiskFullError(
+            f"no space left on the device writing {path} ({exc.strerror}); {kept}"
+        ) from exc
 
 
 def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> Path:
@@ -20,8 +46,18 @@ def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> Path:
 
     Returns:
         ``path``.
+
+    Raises:
+        DiskFullError: The disk or quota is full; the previous ``path`` (if any) is
+            intact and no temporary file is left.
     """
     path = Path(path)
+    kept = f"the previous {path.name} is kept" if path.exists() else f"no {path.name} was written"
+    with disk_full_guard(path, kept):
+        return _atomic_write(path, write)
+
+
+def _atomic_write(path: Path, write: Callable[[BinaryIO], None]) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     # mkstemp creates the file 0600; give the result the usual permissions instead.

@@ -1,5 +1,11 @@
-"""Signals a long run turns into a clean stop: the first Ctrl-C (or SIGTERM) is a
-request checked at a safe point, not an exception at an arbitrary bytecode."""
+"""Signals a long run turns into a clean stop.
+
+SIGINT (Ctrl-C) and SIGTERM (what schedulers, ``kill`` and ``timeout`` send) mean the
+same here: stop, keep what is done, print one line, exit ``128 + signal`` (130 and 143).
+:func:`terminate_as_interrupt` makes SIGTERM raise :class:`Interrupted` as Ctrl-C raises
+``KeyboardInterrupt``; :func:`deferred_interrupt` turns the first of either signal into a
+request a training loop checks at a safe point.
+"""
 
 from __future__ import annotations
 
@@ -9,43 +15,98 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-__all__ = ["StopRequest", "deferred_interrupt"]
+__all__ = [
+    "STOP_SIGNALS",
+    "Interrupted",
+    "StopRequest",
+    "deferred_interrupt",
+    "terminate_as_interrupt",
+]
+
+#: The signals that stop a run cleanly.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by a signal; ``str()`` is the one line for the user.
+
+    Args:
+        message: What was kept and how to continue (may be empty).
+        signum: The signal that stopped it.
+    """
+
+    def __init__(self, message: str = "", signum: int = signal.SIGINT) -> None:
+        super().__init__(message)
+        self.signum = int(signum)
+
+    @property
+    def exit_status(self) -> int:
+        """``128 + signum``, the shell's convention (130 for SIGINT, 143 for SIGTERM)."""
+        return 128 + self.signum
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+@contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Interrupted` (``signum=SIGTERM``) as
+    Ctrl-C raises ``KeyboardInterrupt``, so ``finally`` blocks and journals close as on
+    Ctrl-C instead of the process dying mid-write. Outside the main thread, or when
+    SIGTERM is ignored, nothing changes."""
+    if not _main_thread() or signal.getsignal(signal.SIGTERM) is signal.SIG_IGN:
+        yield
+        return
+
+    def terminate(signum: int, frame: object) -> None:
+        raise Interrupted(signum=signum)
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 @dataclass
 class StopRequest:
-    """Set by the first Ctrl-C inside :func:`deferred_interrupt`."""
+    """Set by the first SIGINT or SIGTERM inside :func:`deferred_interrupt`."""
 
     requested: bool = False
+    #: The signal that requested the stop (``None`` until one does).
+    signum: int | None = None
 
 
 @contextmanager
 def deferred_interrupt() -> Iterator[StopRequest]:
-    """Turn the first Ctrl-C into a request the caller checks at a safe point.
+    """Turn the first Ctrl-C or SIGTERM into a request the caller checks at a safe point.
 
     A ``KeyboardInterrupt`` raised at an arbitrary bytecode can leave torch or
     tensordict state half-changed (and then surface as an unrelated error); a training
     loop instead checks ``stop.requested`` between iterations and stops cleanly. A
-    second Ctrl-C raises ``KeyboardInterrupt`` at once. Outside the main thread, or when
-    SIGINT is ignored (a background job), nothing changes.
+    second signal raises :class:`Interrupted` at once. Outside the main thread nothing
+    changes; a signal the process ignores (SIGINT in a background job) stays ignored.
 
     Yields:
         The request flag.
     """
     stop = StopRequest()
-    if threading.current_thread() is not threading.main_thread() or (
-        signal.getsignal(signal.SIGINT) is signal.SIG_IGN
-    ):
+    if not _main_thread():
         yield stop
         return
 
     def request(signum: int, frame: object) -> None:
         if stop.requested:
-            raise KeyboardInterrupt
-        stop.requested = True
+            raise Interrupted(signum=signum)
+        stop.requested, stop.signum = True, signum
 
-    previous = signal.signal(signal.SIGINT, request)
+    previous = {}
+    for signum in STOP_SIGNALS:
+        if signal.getsignal(signum) is not signal.SIG_IGN:
+            previous[signum] = signal.signal(signum, request)
     try:
         yield stop
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
