@@ -4,17 +4,21 @@ Coordinates everywhere in rtaw_marl are ``(x, y)`` with ``x`` the column and ``y
 the row, both starting at 0 in the top-left corner of the file as written. Arrays
 indexed by cell are indexed ``[y, x]``.
 
-Supported files:
+Supported files (UTF-8, a byte-order mark and CRLF line ends are read as such):
 
-* SBPL-style ``.cfg`` (the original RTAW code's layouts): 10 header lines, the last
-  one ``environment:``, then ``H`` rows of ``W`` space-separated integers, ``0`` free
-  and ``>= obsthresh`` blocked.
-* MovingAI ``.map`` (octile): ``key value`` header lines up to ``map``, then ``H``
-  lines of ``W`` characters; ``@``, ``T``, ``O`` and ``W`` are blocked, every other
-  character is free.
+* SBPL-style ``.cfg`` (the original RTAW code's layouts): ``key: value`` header lines
+  up to ``environment:``, then ``H`` rows of ``W`` space-separated numbers, ``0`` free
+  and ``>= obsthresh`` blocked; a NaN, infinite or negative value (or threshold) is an
+  error, not a free cell. Blank lines between rows are skipped, as SBPL does.
+* MovingAI ``.map`` (octile): ``type octile`` (optional), ``height H``, ``width W``,
+  ``map``, then exactly ``H`` lines of ``W`` characters of MovingAI's legend: ``.``,
+  ``G``, ``S`` passable, ``@``, ``O``, ``T``, ``W`` blocked.
 * ASCII ``.txt``/``.grid``: rows of ``.`` (free) and ``@`` (blocked), no header.
 
-Any other extension is an error naming these (:data:`LAYOUT_FORMATS`), rather than a
+In ``.map`` and ASCII files any other character, a ragged row, a blank line inside the
+grid (blank lines before and after it are fine) or a header that disagrees with the
+grid is a :class:`LayoutError` naming the file and line (and column). Any other
+extension is an error naming the formats (:data:`LAYOUT_FORMATS`), rather than a
 MovingAI ``.scen`` or a JSON file misread as an ASCII map.
 """
 
@@ -51,7 +55,14 @@ LAYOUT_FORMATS = {
     ".grid": "ASCII",
 }
 
-_BLOCKED_MAP_CHARS = frozenset("@TOW")
+
+#: MovingAI's legend (movingai.com/benchmarks/formats.html): the passable characters,
+#: the blocked ones (``W``, water, blocks ground robots) and how a message lists them.
+#: Any other character is an error, not a free cell.
+_MOVINGAI_LEGEND = (
+    ".GS", "@OTW", "MovingAI cells are '.', 'G', 'S' (passable) and '@', 'O', 'T', 'W' (blocked)"
+)  # fmt: skip
+_ASCII_LEGEND = (".", "@", "ASCII layouts use '.' (free) and '@' (blocked)")
 _FOUR_CONNECTED = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)
 
 
@@ -284,7 +295,8 @@ def load_layout(path: str | Path) -> Layout:
 
     Raises:
         LayoutError: The file is missing, its extension names no known format (a
-            ``.scen`` or ``.json`` file is not read as an ASCII map), or it is malformed.
+            ``.scen`` or ``.json`` file is not read as an ASCII map), or it is malformed
+            (the message names the line, and the column of a bad cell).
     """
     path = Path(path)
     if not path.is_file():
@@ -296,40 +308,50 @@ def load_layout(path: str | Path) -> Layout:
             f"{path}: unknown layout format {suffix or '(no extension)'!r}; known: {known}"
         )
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise LayoutError(f"cannot read layout file {path}: {exc}") from exc
+    # read_text turns CRLF (and CR) into "\n"; split there only: str.splitlines would
+    # also split a row at a form feed or a vertical tab, silently adding a row.
+    lines = text.split("\n")
     if suffix == ".cfg":
-        grid = _parse_cfg(text, path)
+        grid = _parse_cfg(lines, path)
     elif suffix == ".map":
-        grid = _parse_movingai(text, path)
+        grid = _parse_movingai(lines, path)
     else:
-        grid = _parse_rows(text.splitlines(), path, first_line=1)
+        grid = _cells(_grid_rows(lines, 1, path), path, _ASCII_LEGEND)
     return Layout(grid, name=path.stem)
 
 
-def _parse_cfg(text: str, path: Path) -> np.ndarray:
-    lines = text.splitlines()
-    header = {}
-    for lineno, line in enumerate(lines, start=1):
-        if line.strip().startswith("environment:"):
-            body_start = lineno
-            break
-        key, sep, value = line.partition(":")
-        if sep:
-            header[key.strip()] = value.split()
-    else:
+def _parse_cfg(lines: list[str], path: Path) -> np.ndarray:
+    body = next((i for i, line in enumerate(lines) if line.strip().startswith("environment:")), -1)
+    if body < 0:
         raise LayoutError(f"{path}: no 'environment:' line; not an SBPL .cfg layout")
+    header: dict[str, tuple[int, list[str]]] = {}
+    for lineno, line in enumerate(lines[:body], start=1):
+        key, sep, value = (part.strip() for part in line.partition(":"))
+        if (key or sep) and (not sep or key in header):
+            raise LayoutError(
+                f"{path}: line {lineno}: header lines are 'key: value', each key once; "
+                f"got {line.strip()[:40]!r}"
+            )
+        header[key] = (lineno, value.split())
     try:
-        width, height = (int(v) for v in header["discretization(cells)"])
-        obsthresh = float(header.get("obsthresh", ["1"])[0])
+        width, height = (int(v) for v in header["discretization(cells)"][1])
     except (KeyError, ValueError) as exc:
         raise LayoutError(f"{path}: bad or missing 'discretization(cells): W H' header") from exc
-    numbered = [
-        (body_start + 1 + i, line.split())
-        for i, line in enumerate(lines[body_start:])
-        if line.strip()
-    ]
+    if min(width, height) < 1:
+        raise LayoutError(f"{path}: 'discretization(cells): {width} {height}' has no cell")
+    lineno, values = header.get("obsthresh", (0, ["1"]))
+    # A NaN threshold would block nothing: every comparison with it is False.
+    obsthresh = float(values[0]) if len(values) == 1 and _is_number(values[0]) else np.nan
+    if not np.isfinite(obsthresh):
+        raise LayoutError(
+            f"{path}: line {lineno}: obsthresh must be one finite number, got {' '.join(values)!r}"
+        )
+    # SBPL and np.loadtxt both skip blank lines between rows; the header's H counts rows.
+    numbered = [(body + 2 + i, line.split()) for i, line in enumerate(lines[body + 1 :])]
+    numbered = [(lineno, row) for lineno, row in numbered if row]
     if len(numbered) != height:
         raise LayoutError(f"{path}: header says {height} rows, found {len(numbered)}")
     for i, (lineno, row) in enumerate(numbered):
@@ -337,53 +359,93 @@ def _parse_cfg(text: str, path: Path) -> np.ndarray:
             raise LayoutError(
                 f"{path}: row {i} (line {lineno}) has {len(row)} cells, expected {width}"
             )
+    return _cfg_values(numbered, path) >= obsthresh
+
+
+def _cfg_values(numbered: list[tuple[int, list[str]]], path: Path) -> np.ndarray:
+    """The cell values ``float [H, W]``: finite numbers ``>= 0`` (SBPL stores costs as
+    unsigned bytes, so a negative cost there is a large one, not a free cell)."""
     rows = [row for _, row in numbered]
     try:
         values = np.array(rows, dtype=float)
-    except ValueError as exc:
-        raise LayoutError(f"{path}: non-numeric cell value ({exc})") from exc
-    return values >= obsthresh
-
-
-def _parse_movingai(text: str, path: Path) -> np.ndarray:
-    lines = text.splitlines()
-    header: dict[str, str] = {}
-    map_line = next((i for i, line in enumerate(lines) if line.strip().lower() == "map"), None)
-    if map_line is None:
-        raise LayoutError(f"{path}: no 'map' line; not a MovingAI .map file")
-    for line in lines[:map_line]:
-        key, _, value = line.strip().partition(" ")
-        header[key.lower()] = value.strip()
-    lineno = map_line + 1
-    try:
-        height, width = int(header["height"]), int(header["width"])
-    except (KeyError, ValueError) as exc:
-        raise LayoutError(f"{path}: bad or missing 'height'/'width' header") from exc
-    grid = _parse_rows(lines[lineno:], path, first_line=lineno + 1, blocked=_BLOCKED_MAP_CHARS)
-    if grid.shape != (height, width):
+    except ValueError:  # a token is not a number: a NaN marks it for the message below
+        values = np.array([[float(v) if _is_number(v) else np.nan for v in row] for row in rows])
+    bad = np.argwhere(~np.isfinite(values) | (values < 0))
+    if len(bad):
+        i, j = (int(k) for k in bad[0])
         raise LayoutError(
-            f"{path}: header says {width}x{height}, grid is {grid.shape[1]}x{grid.shape[0]}"
+            f"{path}: line {numbered[i][0]}, column {j + 1}: cell value {rows[i][j]!r} is "
+            "not a finite number >= 0"
         )
-    return grid
+    return values
 
 
-def _parse_rows(
-    rows: list[str], path: Path, first_line: int, blocked: frozenset[str] = frozenset("@")
-) -> np.ndarray:
-    # Keep each row's line number in the file, blank lines included, for error messages.
-    numbered = [(first_line + i, row.rstrip()) for i, row in enumerate(rows) if row.strip()]
-    if not numbered:
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _parse_movingai(lines: list[str], path: Path) -> np.ndarray:
+    body = next((i for i, line in enumerate(lines) if line.strip().lower() == "map"), -1)
+    if body < 0:
+        raise LayoutError(f"{path}: no 'map' line; not a MovingAI .map file")
+    header: dict[str, str] = {}
+    for lineno, line in enumerate(lines[:body], start=1):
+        key, _, value = line.strip().partition(" ")
+        if key and (key.lower() not in ("type", "height", "width") or key.lower() in header):
+            raise LayoutError(
+                f"{path}: line {lineno}: unknown or repeated header field {key!r}; a MovingAI "
+                "header is 'type octile', 'height H', 'width W', then 'map'"
+            )
+        header[key.lower()] = value.strip()
+    if header.get("type", "octile") != "octile":
+        raise LayoutError(f"{path}: map type {header['type']!r} is not 'octile'")
+    size = {key: header.get(key, "(none)") for key in ("height", "width")}
+    for key, value in size.items():
+        if not (value.isascii() and value.isdigit() and int(value) >= 1):
+            raise LayoutError(f"{path}: header '{key}' must be a positive integer, got {value!r}")
+    rows = _grid_rows(lines[body + 1 :], body + 2, path)
+    if len(rows) != int(size["height"]):
+        raise LayoutError(f"{path}: header says {size['height']} rows (height), found {len(rows)}")
+    return _cells(rows, path, _MOVINGAI_LEGEND, int(size["width"]))
+
+
+def _grid_rows(lines: list[str], first_line: int, path: Path) -> list[tuple[int, str]]:
+    """The grid's rows with their line numbers in the file. Blank lines before and after
+    the grid are skipped; one inside it is an error (dropping it would shift every row
+    below it by one)."""
+    rows = [(first_line + i, line.rstrip(" \t")) for i, line in enumerate(lines)]
+    filled = [i for i, (_, row) in enumerate(rows) if row]
+    if not filled:
         raise LayoutError(f"{path}: empty layout")
-    width = len(numbered[0][1])
-    for lineno, row in numbered:
+    rows = rows[filled[0] : filled[-1] + 1]
+    blank = next((lineno for lineno, row in rows if not row), None)
+    if blank is not None:
+        raise LayoutError(f"{path}: line {blank} is blank inside the grid (a missing row)")
+    return rows
+
+
+def _cells(
+    rows: list[tuple[int, str]], path: Path, legend: tuple[str, str, str], width: int | None = None
+) -> np.ndarray:
+    """The obstacle grid of ``rows``, each ``width`` characters (default: the first
+    row's) of ``legend``; the first ragged row or undefined character is an error."""
+    width = len(rows[0][1]) if width is None else width
+    free, blocked_chars, listing = legend
+    allowed = frozenset(free + blocked_chars)
+    for lineno, row in rows:
         if len(row) != width:
             raise LayoutError(f"{path}: line {lineno} has {len(row)} cells, expected {width}")
-    chars = np.array([list(row) for _, row in numbered])
-    if blocked == frozenset("@"):
-        unknown = {str(c) for c in np.unique(chars)} - {".", "@"}
-        if unknown:
+        if not allowed.issuperset(row):
+            col = next(j for j, char in enumerate(row) if char not in allowed)
             raise LayoutError(
-                f"{path}: unknown cell characters {sorted(unknown)}; ASCII layouts use "
-                "'.' (free) and '@' (blocked)"
+                f"{path}: line {lineno}, column {col + 1}: undefined cell character "
+                f"{row[col]!r}; {listing}"
             )
-    return np.isin(chars, list(blocked))
+    codes = np.frombuffer("".join(row for _, row in rows).encode("ascii"), dtype=np.uint8)
+    blocked = np.zeros(128, dtype=bool)
+    blocked[[ord(char) for char in blocked_chars]] = True
+    return blocked[codes].reshape(len(rows), width)
