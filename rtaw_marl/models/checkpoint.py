@@ -18,16 +18,25 @@ target, so a kill at any moment leaves the previous or the new checkpoint, both 
 Checkpoints are shared between people, so they are read with ``weights_only=True``:
 tensors, numbers, strings and containers only, never a pickled callable. A crafted file
 is refused before any of its code can run.
+
+Before torch reads a file, :func:`check_archive` makes sure it is one: a regular file
+(a folder, FIFO, dangling symlink or symlink loop is said as such), not empty, and an
+intact zip archive whose CRCs hold, so that flipped bytes inside a stored tensor are
+found rather than evaluated as weights. After it, every weight (actor, critic and
+optimizer state) must be finite (:func:`check_finite`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import errno
 import pickle
 import platform
 import re
+import stat
 import sys
-from collections.abc import Mapping
+import zipfile
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +63,8 @@ from rtaw_marl.utils.atomic import atomic_write
 __all__ = [
     "FORMAT",
     "build_networks",
+    "check_archive",
+    "check_finite",
     "library_versions",
     "load_checkpoint",
     "load_networks",
@@ -107,13 +118,14 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
     """Load and validate a checkpoint, without running any code stored in it.
 
     Raises:
-        ConfigError: The file is missing, unreadable, holds anything but plain data,
-            is not an rtaw_marl checkpoint, or was trained on a different observation
-            layout than this version produces.
+        ConfigError: The file is missing, not a regular file, empty, not an intact zip
+            archive (:func:`check_archive`), holds
+            anything but plain data, is not an rtaw_marl checkpoint, holds a non-finite
+            weight, or was trained on a different observation layout than this version
+            produces.
     """
     path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"checkpoint not found: {path}")
+    check_archive(path)
     try:
         # Checkpoints written before 0.3 stored torch's version object; it is a plain
         # str subclass, so allowing it lets no code run.
@@ -140,7 +152,96 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
             f"checkpoint {path} was trained on observation features {ckpt.get('features')}, "
             f"this version produces {expected}"
         )
+    check_finite(ckpt, path)
     return ckpt
+
+
+def check_archive(path: Path) -> None:
+    """Refuse a path that is not a readable, intact ``torch.save`` zip archive.
+
+    Raises:
+        ConfigError: One line naming ``path`` and what it is instead.
+    """
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        if path.is_symlink():
+            raise ConfigError(
+                f"checkpoint {path} is a dangling symlink (its target is missing)"
+            ) from None
+        raise ConfigError(f"checkpoint not found: {path}") from None
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise ConfigError(f"checkpoint {path} is a symlink loop") from None
+        raise ConfigError(f"cannot read checkpoint {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise ConfigError(f"checkpoint {path} is {_file_kind(info.st_mode)}, not a file")
+    if info.st_size == 0:
+        raise ConfigError(f"checkpoint {path} is empty (0 bytes)")
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1)
+        is_zip = zipfile.is_zipfile(path)
+        if is_zip:
+            with zipfile.ZipFile(path) as archive:
+                names, bad = archive.namelist(), archive.testzip()
+    except (zipfile.BadZipFile, EOFError, ValueError) as exc:
+        raise ConfigError(f"checkpoint {path} is a damaged zip archive: {exc}") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read checkpoint {path}: {exc.strerror or exc}") from None
+    if not is_zip:
+        raise ConfigError(_not_zip(path, head))
+    if bad is not None:
+        raise ConfigError(f"checkpoint {path} is damaged: {bad} fails its CRC check")
+    if not any(name.endswith("/data.pkl") for name in names):
+        raise ConfigError(f"checkpoint {path} is a zip archive but not a torch checkpoint")
+
+
+def _not_zip(path: Path, head: bytes) -> str:
+    # 0x80 opens every pickle of protocol 2 and later: torch's legacy format or pickle.dump.
+    if head == b"\x80":
+        return (
+            f"checkpoint {path} is a raw pickle (or torch's legacy non-zip format), which "
+            "is never loaded as it could run code: only torch.save's zip archives are read"
+        )
+    return f"checkpoint {path} is not a torch checkpoint (not a zip archive)"
+
+
+def _file_kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "a device"
+
+
+def _tensors(tree: Any, prefix: str) -> Iterator[tuple[str, torch.Tensor]]:
+    if isinstance(tree, torch.Tensor):
+        yield prefix, tree
+    elif isinstance(tree, Mapping):
+        for key, value in tree.items():
+            yield from _tensors(value, f"{prefix}.{key}")
+    elif isinstance(tree, (list, tuple)):
+        for i, value in enumerate(tree):
+            yield from _tensors(value, f"{prefix}.{i}")
+
+
+def check_finite(ckpt: Mapping[str, Any], path: str | Path) -> None:
+    """Refuse a checkpoint with a NaN or infinite weight or optimizer moment (a policy
+    with one acts as an all-zero actor, or fails mid-run).
+
+    Raises:
+        ConfigError: Naming the first non-finite tensor, e.g. ``model.actor.head.weight``.
+    """
+    for root in ("model", "optimizer"):
+        for name, tensor in _tensors(ckpt.get(root), root):
+            if tensor.is_floating_point() and not bool(torch.isfinite(tensor).all()):
+                bad = int((~torch.isfinite(tensor)).sum())
+                raise ConfigError(
+                    f"checkpoint {path}: {name} holds {bad} non-finite value(s) (NaN or inf)"
+                )
 
 
 def load_networks(ckpt: Mapping[str, Any], path: str | Path) -> tuple[Actor, Critic]:

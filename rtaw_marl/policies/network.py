@@ -11,6 +11,7 @@ and ``agent``: it needs ``observation="full"``; RTAW+ (``model=rtaw_plus``) read
 from __future__ import annotations
 
 import difflib
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -62,7 +63,9 @@ def load_policy(
 def _resolve(source: str | Path) -> Path:
     """The checkpoint file of a path or shipped name."""
     path = Path(source)
-    if path.is_file() or isinstance(source, Path):
+    # Anything at the path (a folder, a FIFO, a broken symlink) is the checkpoint meant:
+    # load_checkpoint says what is wrong with it, rather than "not a shipped name".
+    if isinstance(source, Path) or os.path.lexists(path):
         return path
     if source in PRETRAINED:
         return pretrained_path(source)

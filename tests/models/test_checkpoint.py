@@ -4,6 +4,8 @@ files whose metadata does not fit their weights give one clear error."""
 from __future__ import annotations
 
 import os
+import pickle
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -42,6 +44,30 @@ def _save(path: Path, config: RTAWConfig | RTAWPlusConfig, **overrides: object) 
     }
     payload.update(overrides)
     return save_checkpoint(path, payload)
+
+
+def _flip_tensor_bytes(path: Path, count: int = 16) -> None:
+    """Flip ``count`` bytes in the middle of the first stored tensor (as a bad disk or
+    transfer would): the archive still opens, only its CRC tells."""
+    with zipfile.ZipFile(path) as archive:
+        info = archive.getinfo("archive/data/0")
+    raw = bytearray(path.read_bytes())
+    # The local header: 30 bytes, then the name and the extra field (lengths at 26, 28).
+    name_len = int.from_bytes(raw[info.header_offset + 26 : info.header_offset + 28], "little")
+    extra_len = int.from_bytes(raw[info.header_offset + 28 : info.header_offset + 30], "little")
+    data = info.header_offset + 30 + name_len + extra_len
+    middle = data + info.file_size // 2
+    for i in range(middle, middle + count):
+        raw[i] ^= 0xFF
+    path.write_bytes(bytes(raw))
+
+
+def _save_poisoned(path: Path, net: str, value: float, **overrides: object) -> Path:
+    """A checkpoint whose ``net`` has one weight set to ``value`` (NaN or inf)."""
+    actor, critic = build_networks(RTAWConfig())
+    state = {"actor": actor.state_dict(), "critic": critic.state_dict()}
+    state[net]["encoder.robot_embed.0.weight"][0, 0] = value
+    return _save(path, RTAWConfig(), model=state, **overrides)
 
 
 def test_malicious_pickle_is_refused_before_it_runs(tmp_path: Path) -> None:
@@ -113,7 +139,7 @@ def test_missing_weights(tmp_path: Path) -> None:
 def test_not_a_torch_file(tmp_path: Path) -> None:
     path = tmp_path / "a.pt"
     path.write_bytes(b"\x00\x01garbage")
-    with pytest.raises(ConfigError, match="cannot read checkpoint"):
+    with pytest.raises(ConfigError, match=r"a.pt is not a torch checkpoint \(not a zip archive\)"):
         load_checkpoint(path)
 
 
@@ -123,7 +149,13 @@ def test_not_a_torch_file(tmp_path: Path) -> None:
         ("malicious", "holds more than plain data (it would call posix.open"),
         ("no model_config", "has no 'model_config' dict"),
         ("wrong weights", "actor weights do not fit its model_config"),
-        ("garbage", "cannot read checkpoint"),
+        ("garbage", "is not a torch checkpoint (not a zip archive)"),
+        ("folder", "bad.pt is a folder, not a file"),
+        ("crc", "is damaged: archive/data/0 fails its CRC check"),
+        (
+            "nan",
+            "model.actor.encoder.robot_embed.0.weight holds 1 non-finite value(s) (NaN or inf)",
+        ),
     ],
 )
 def test_bad_checkpoints_through_the_cli(cli, tmp_path: Path, case: str, message: str) -> None:
@@ -138,6 +170,12 @@ def test_bad_checkpoints_through_the_cli(cli, tmp_path: Path, case: str, message
         torch.save(ckpt, path)
     elif case == "wrong weights":
         _save(path, RTAWConfig(embed_dim=32), model_config=plain_model(RTAWConfig()))
+    elif case == "folder":
+        path.mkdir()
+    elif case == "crc":
+        _flip_tensor_bytes(_save(path, RTAWConfig()))
+    elif case == "nan":
+        _save_poisoned(path, "actor", float("nan"))
     else:
         path.write_bytes(b"PK\x03\x04 not a checkpoint")
     result = cli("eval", "policy=[mpdm,checkpoint]", f"checkpoint={path}", "seeds=[0]",
@@ -147,3 +185,78 @@ def test_bad_checkpoints_through_the_cli(cli, tmp_path: Path, case: str, message
     assert len(result.err.strip().splitlines()) == 1
     assert "Traceback" not in result.err
     assert not marker.exists()
+
+
+def _raw_pickle(path: Path) -> None:
+    path.write_bytes(pickle.dumps({"format": "rtaw_marl.checkpoint/1"}))
+
+
+def _legacy(path: Path) -> None:
+    torch.save({"a": torch.ones(2)}, path, _use_new_zipfile_serialization=False)
+
+
+def _zip_of_text(path: Path) -> None:
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("notes.txt", "hello")
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("folder", "x.pt is a folder, not a file"),
+        ("fifo", "x.pt is a FIFO, not a file"),
+        ("dangling", "x.pt is a dangling symlink (its target is missing)"),
+        ("loop", "x.pt is a symlink loop"),
+        ("empty", "x.pt is empty (0 bytes)"),
+        ("text", "x.pt is not a torch checkpoint (not a zip archive)"),
+        ("raw pickle", "x.pt is a raw pickle (or torch's legacy non-zip format), which is "
+                       "never loaded as it could run code"),
+        ("legacy", "x.pt is a raw pickle (or torch's legacy non-zip format)"),
+        ("zip", "x.pt is a zip archive but not a torch checkpoint"),
+        ("crc", "x.pt is damaged: archive/data/0 fails its CRC check"),
+        ("nan actor", "model.actor.encoder.robot_embed.0.weight holds 1 non-finite value(s)"),
+        ("inf critic", "model.critic.encoder.robot_embed.0.weight holds 1 non-finite value(s)"),
+        ("nan optimizer", "optimizer.state.0.exp_avg holds 2 non-finite value(s)"),
+    ],
+)  # fmt: skip
+def test_what_is_not_an_intact_finite_checkpoint(tmp_path: Path, case: str, message: str) -> None:
+    """Each is one line naming the path and what it is, for evaluation and resume alike;
+    none reads as "not found", none passes on torch's advice to load unsafely."""
+    path = tmp_path / "x.pt"
+    text = tmp_path / "notes.txt"
+    text.write_text("not a checkpoint\n")
+    if case == "folder":
+        path.mkdir()
+    elif case == "fifo":
+        os.mkfifo(path)
+    elif case == "dangling":
+        path.symlink_to(tmp_path / "gone.pt")
+    elif case == "loop":
+        path.symlink_to(path)
+    elif case == "empty":
+        path.touch()
+    elif case == "text":
+        path.symlink_to(text)
+    elif case == "raw pickle":
+        _raw_pickle(path)
+    elif case == "legacy":
+        _legacy(path)
+    elif case == "zip":
+        _zip_of_text(path)
+    elif case == "crc":
+        _flip_tensor_bytes(_save(path, RTAWConfig()))
+    elif case == "nan actor":
+        _save_poisoned(path, "actor", float("nan"))
+    elif case == "inf critic":
+        _save_poisoned(path, "critic", float("inf"))
+    else:
+        moments = {"exp_avg": torch.tensor([1.0, float("nan"), float("-inf")])}
+        _save(path, RTAWConfig(), optimizer={"state": {0: moments}, "param_groups": []})
+    for load in (load_checkpoint, load_policy):
+        with pytest.raises(ConfigError) as raised:
+            load(str(path))
+        line = str(raised.value)
+        assert message in line
+        assert str(path) in line
+        assert "\n" not in line
+        assert "weights_only" not in line
