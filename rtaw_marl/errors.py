@@ -74,3 +74,23 @@ class PlanningTimeout(PlanningError):
 
 class ScheduleError(RtawError, AssertionError):
     """An executed schedule breaks a rule: a conflict, an illegal move, a task not served."""
+
+
+class EnvUsageError(RtawError, RuntimeError):
+    """An env's Python API was used out of order (after ``close()``) or given an argument
+    it does not take; the message says what to call or pass instead."""
+
+
+class ResetNeededError(EnvUsageError, AttributeError):
+    """An env was used before its first ``reset()``. Also an ``AttributeError``, what
+    PettingZoo raises for ``agents`` or ``agent_selection`` before reset, so ``hasattr``
+    still answers ``False``."""
+
+
+class UnknownAgentError(EnvUsageError, KeyError):
+    """An agent name outside the env's ``possible_agents``. Also a ``KeyError``, what a
+    lookup in PettingZoo's per-agent dicts raises."""
+
+    def __str__(self) -> str:
+        # KeyError's str() is the repr of its argument; keep the message as written.
+        return str(self.args[0]) if self.args else ""

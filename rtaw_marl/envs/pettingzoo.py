@@ -125,6 +125,18 @@ episode (tasks, starts, noise) and reseeds `np_random` (a NumPy `Generator`;
 `np_random_seed` is `s`); `reset()` without a seed draws the episode seed from
 `np_random`, so a seeded sequence of episodes is reproducible.
 
+## Misuse
+
+Every call out of order raises one of the project's errors (`rtaw_marl.errors`), with
+what to do in the message: `observe`, `step`, `last`, `state`, `render`, `agent_iter`,
+`observe_all`, or reading `agents`, `agent_selection`, `rewards`, ... before the first
+`reset()` raise `ResetNeededError` (also an `AttributeError`, as PettingZoo's wrapper
+raises for attributes); any call after `close()` raises `EnvUsageError`; an agent
+name outside `possible_agents` (`observe`, `observation_space`, `action_space`) raises
+`UnknownAgentError` (also a `KeyError`). `reset(options=...)` takes `None` or a dict;
+the env has no reset options, so a dict's keys are ignored with a `UserWarning` naming
+them (not an error: PettingZoo's own `api_test` passes `{"options": 1}`).
+
 ## Rendering
 
 `render_mode="human"` prints the grid as text, `"ansi"` returns it: `.` free, `@`
@@ -164,6 +176,7 @@ noise_var=0` unless given, as `navigator=sipp` does on the command line).
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -176,7 +189,13 @@ from pettingzoo.utils import wrappers
 from rtaw_marl import register_envs
 from rtaw_marl.envs.observations import AgentViews, Features, ObservationLayout, state_vector
 from rtaw_marl.envs.text import render_ansi
-from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.errors import (
+    ConfigError,
+    EnvUsageError,
+    InvalidActionError,
+    ResetNeededError,
+    UnknownAgentError,
+)
 from rtaw_marl.scenarios import scenario as find_scenario
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
@@ -185,10 +204,35 @@ from rtaw_marl.sim.inputs import seed_value
 from rtaw_marl.sim.metrics import EpisodeMetrics
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
-__all__ = ["env", "raw_env", "zero_info"]
+__all__ = ["env", "raw_env", "reset_option_keys", "zero_info"]
 
 Observation = dict[str, Any]
 Info = dict[str, float | int]
+
+#: Attributes that exist from the first ``reset()`` on (PettingZoo's order-enforced set).
+_SET_BY_RESET = frozenset(
+    {"agents", "agent_selection", "rewards", "terminations", "truncations", "infos"}
+    | {"num_agents", "_cumulative_rewards"}
+)
+
+
+def _not_reset(call: str) -> ResetNeededError:
+    return ResetNeededError(f"{call} before reset(): call env.reset() first")
+
+
+def reset_option_keys(options: object) -> list[str]:
+    """The keys of ``reset(options=...)``, which must be ``None`` or a mapping.
+
+    Raises:
+        EnvUsageError: ``options`` is neither ``None`` nor a mapping.
+    """
+    if options is None:
+        return []
+    if not isinstance(options, Mapping):
+        raise EnvUsageError(
+            f"reset(options=...) takes a dict or None, got {type(options).__name__} {options!r:.40}"
+        )
+    return sorted(map(str, options))
 
 
 def env(**kwargs: Any) -> AECEnv:
@@ -201,17 +245,47 @@ def env(**kwargs: Any) -> AECEnv:
 
 
 class _OrderEnforcing(wrappers.OrderEnforcingWrapper):
-    """``OrderEnforcingWrapper`` whose :meth:`last` is the env's own.
+    """``OrderEnforcingWrapper`` whose :meth:`last` is the env's own, and whose calls
+    before ``reset()`` raise :class:`~rtaw_marl.errors.ResetNeededError` as the raw env
+    does (PettingZoo's raise a bare ``AssertionError`` or ``AttributeError``).
 
     PettingZoo's ``AECEnv.last`` reads the per-agent tables, which hold live agents only,
     so it raises ``KeyError`` once every agent is removed; :meth:`raw_env.last` answers.
     """
 
+    def __getattr__(self, name: str) -> Any:
+        if name in _SET_BY_RESET and not self._has_reset:
+            raise _not_reset(f"env.{name}")
+        return super().__getattr__(name)
+
+    def _require_reset(self, call: str) -> None:
+        if not self._has_reset:
+            raise _not_reset(call)
+
     def last(self, observe: bool = True) -> tuple[Observation | None, float, bool, bool, Info]:
         """:meth:`raw_env.last`, after the wrapper's check that ``reset`` was called."""
-        if not self._has_reset:
-            raise AttributeError("last() cannot be called before reset()")
+        self._require_reset("env.last()")
         return self.env.last(observe)
+
+    def step(self, action: int | None) -> None:
+        self._require_reset("env.step()")
+        super().step(action)
+
+    def observe(self, agent: str) -> Observation:
+        self._require_reset("env.observe()")
+        return super().observe(agent)
+
+    def state(self) -> np.ndarray:
+        self._require_reset("env.state()")
+        return super().state()
+
+    def render(self) -> str | None:
+        self._require_reset("env.render()")
+        return super().render()
+
+    def agent_iter(self, max_iter: int = 2**63) -> Any:
+        self._require_reset("env.agent_iter()")
+        return super().agent_iter(max_iter)
 
     def __str__(self) -> str:
         return str(self.env)
@@ -264,6 +338,8 @@ class raw_env(AECEnv):
             ConfigError: An unknown or invalid option or key.
         """
         super().__init__()
+        # Live from reset() to close(); one flag read is all the hot path pays.
+        self._live, self._closed = False, False
         modes = self.metadata["render_modes"]
         if render_mode is not None and render_mode not in modes:
             raise ConfigError(
@@ -295,26 +371,62 @@ class raw_env(AECEnv):
         """The simulator's navigator (RBTS uses it to measure other robots' distances)."""
         return self.sim.navigator
 
+    def __getattr__(self, name: str) -> Any:
+        # Python calls this only when normal lookup fails, so live reads pay nothing.
+        if name in _SET_BY_RESET:
+            raise _not_reset(f"env.{name}")
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    def _misuse(self, call: str) -> EnvUsageError:
+        """The error for ``call`` while the env is not live (before reset, after close)."""
+        if self._closed:
+            return EnvUsageError(f"{call} after close(): this env is closed; make a new one")
+        return _not_reset(call)
+
+    def _unknown(self, agent: object) -> UnknownAgentError:
+        names = [repr(name) for name in self.possible_agents]
+        if len(names) > 4:
+            names = [names[0], names[1], "...", names[-1]]
+        return UnknownAgentError(f"unknown agent {agent!r}; the agents are {', '.join(names)}")
+
     def observation_space(self, agent: str) -> spaces.Dict:
-        return self.observation_spaces[agent]
+        try:
+            return self.observation_spaces[agent]
+        except (KeyError, TypeError):
+            raise self._unknown(agent) from None
 
     def action_space(self, agent: str) -> spaces.Discrete:
-        return self.action_spaces[agent]
+        try:
+            return self.action_spaces[agent]
+        except (KeyError, TypeError):
+            raise self._unknown(agent) from None
 
     # ------------------------------------------------------------------ reset
     def reset(self, seed: int | None = None, options: dict | None = None) -> None:
         """Start an episode; ``seed`` fixes tasks, starts and noise and reseeds
         ``np_random``; without a seed the episode seed is drawn from ``np_random``.
 
+        ``options`` is ``None`` or a dict; the env takes no options, so a dict's keys are
+        ignored with a ``UserWarning`` (PettingZoo's ``api_test`` passes a dummy key).
+
         Raises:
             ConfigError: ``seed`` is neither ``None`` nor an integer ``>= 0``.
+            EnvUsageError: ``options`` is not a dict, or the env is closed.
         """
+        if self._closed:
+            raise self._misuse("env.reset()")
+        if keys := reset_option_keys(options):
+            warnings.warn(
+                f"reset options {keys} ignored: warehouse_v1's reset takes no options",
+                stacklevel=2,
+            )
         if seed is not None:
             seed = seed_value(seed)
             self.np_random, self.np_random_seed = seeding.np_random(seed)
             episode_seed = seed
         else:
             episode_seed = int(self.np_random.integers(2**63))
+        self._live = False  # until the new episode is built (a bad layout raises here)
         self.sim.reset(episode_seed)
         self._views.clear()
         self.agents = self.possible_agents[:]
@@ -326,11 +438,27 @@ class raw_env(AECEnv):
         self.infos = dict.fromkeys(self.agents, self._final_info)
         self._last_actor = self.possible_agents[0]
         self.agent_selection = self.possible_agents[self.sim.robot]
+        self._live = True
+
+    def close(self) -> None:
+        """End the env's use: every later call raises :class:`EnvUsageError`."""
+        self._live, self._closed = False, True
 
     # ------------------------------------------------------------------ observe
     def observe(self, agent: str) -> Observation:
-        """``{"observation": features, "action_mask": int8 [N]}`` (module docstring)."""
-        return self._views.observe(self._index[agent])
+        """``{"observation": features, "action_mask": int8 [N]}`` (module docstring).
+
+        Raises:
+            UnknownAgentError: ``agent`` is not in ``possible_agents``.
+            EnvUsageError: Before ``reset()`` (:class:`ResetNeededError`) or after ``close()``.
+        """
+        if not self._live:
+            raise self._misuse("env.observe()")
+        try:
+            index = self._index[agent]
+        except (KeyError, TypeError):
+            raise self._unknown(agent) from None
+        return self._views.observe(index)
 
     def observe_all(self) -> dict[str, Features]:
         """Every agent's observation at once, in ``possible_agents`` order.
@@ -340,11 +468,15 @@ class raw_env(AECEnv):
             stacked over robots (``[M, ...]`` per key, or ``[M, flat_size]``); row ``i``
             equals ``observe(possible_agents[i])``. Shared until the next decision.
         """
+        if not self._live:
+            raise self._misuse("env.observe_all()")
         features, masks = self._views.observe_all()
         return {"observation": features, "action_mask": masks}
 
     def state(self) -> np.ndarray:
         """The global state ``float32 [3M + 7N]``: robot table, then queue rows."""
+        if not self._live:
+            raise self._misuse("env.state()")
         return state_vector(self.sim)
 
     # ------------------------------------------------------------------ step
@@ -354,7 +486,10 @@ class raw_env(AECEnv):
         Raises:
             InvalidActionError: ``action`` is not a valid slot of a live agent or ``None``
                 for a done one, or every agent is already removed; the env is unchanged.
+            EnvUsageError: Before ``reset()`` (:class:`ResetNeededError`) or after ``close()``.
         """
+        if not self._live:
+            raise self._misuse("env.step()")
         agent = self.agent_selection
         terminated = self.terminations.get(agent)
         if terminated is None:
@@ -410,6 +545,8 @@ class raw_env(AECEnv):
         """``AECEnv.last``; once every agent is removed (the per-agent tables are empty),
         the final observation of ``agent_selection`` (the last agent removed), reward 0
         (handed out before its removal), the episode's flags and infos."""
+        if not self._live:
+            raise self._misuse("env.last()")
         agent = self.agent_selection
         if agent in self.terminations:
             return super().last(observe)
@@ -420,6 +557,8 @@ class raw_env(AECEnv):
     # ------------------------------------------------------------------ render
     def render(self) -> str | None:
         """The grid as text (``"ansi"``), printed (``"human"``), or ``None`` (no mode)."""
+        if not self._live:
+            raise self._misuse("env.render()")
         if self.render_mode is None:
             return None
         text = render_ansi(self.sim)

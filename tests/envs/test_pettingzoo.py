@@ -32,12 +32,14 @@ USC_64 = MAPS_DIR / "rtaw" / "usc_64.cfg"
 OPEN_64 = {"name": "open", "width": 64, "height": 64}
 
 #: Warnings PettingZoo's checkers emit for any dict observation with a mask that may be
-#: all zeros (non-selected agents) or of length 1 (queue_len=1); nothing else may appear.
+#: all zeros (non-selected agents) or of length 1 (queue_len=1), and the env's own for
+#: ``api_test``'s dummy ``reset(options={"options": 1})``; nothing else may appear.
 EXPECTED_API_WARNINGS = (
     "Observation is not a NumPy array",
     "Observation space for each agent probably should be",
     "Action mask numpy array is all zeros",
     "Action mask is a single number",
+    "reset options ['options'] ignored: warehouse_v1's reset takes no options",
 )
 
 
