@@ -8,13 +8,21 @@ evaluation is the best yet, ``best.pt`` first: a kill between the two writes lea
 
 Resuming refuses what would silently mix two runs: a checkpoint of another model or
 scenario (unless ``resume_new_scenario=true``), or a ``frames`` budget it has already
-spent. It removes the temporary files of a write that a kill interrupted, and cuts
-the CSV logs back to the checkpoint, so the rows a killed run wrote after its last
+spent; and a payload that is incomplete or ill-typed (:func:`check_training_payload`),
+before any work. It removes the temporary files of a write that a kill interrupted, and
+cuts the CSV logs back to the checkpoint, so the rows a killed run wrote after its last
 checkpoint are not followed by the same steps again.
+
+A kill during the ``last.pt`` write that follows a new ``best.pt`` leaves ``last.pt``
+one evaluation behind its sibling ``best.pt``: resuming from that ``last.pt`` resumes
+from the newer ``best.pt`` instead (one line says so), so no evaluation is repeated. The
+bar a new ``best.pt`` must beat is the TTD recorded in the ``best.pt`` on disk.
 """
 
 from __future__ import annotations
 
+import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,7 +35,14 @@ from rtaw_marl.training.config import TrainConfig
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.plain import as_plain
 
-__all__ = ["Checkpoints", "Progress", "clean_interrupted_writes", "resume", "trim_csv_logs"]
+__all__ = [
+    "Checkpoints",
+    "Progress",
+    "check_training_payload",
+    "clean_interrupted_writes",
+    "resume",
+    "trim_csv_logs",
+]
 
 #: The config groups that define what a run is evaluated on.
 SCENARIO_KEYS = ("env", "layout", "navigator", "tasks")
@@ -67,8 +82,12 @@ class Checkpoints:
     def save(self, row: dict[str, float], history: list[dict[str, float]]) -> None:
         """Write the checkpoints after the evaluation ``row``, with every evaluation so
         far (so a resumed run draws its whole curve)."""
+        # Strictly better only: a tie or a worse row never replaces the best on disk.
+        better = row["ttd"] < self.progress.best_ttd
+        if better:
+            self.progress.best_ttd = row["ttd"]
         payload = self._payload(row, history)
-        if row["ttd"] <= self.progress.best_ttd:
+        if better:
             save_checkpoint(self.best, payload)
         save_checkpoint(self.last, payload)
 
@@ -101,16 +120,16 @@ def resume(
     optim: torch.optim.Optimizer,
     run_dir: Path,
 ) -> tuple[Progress, list[dict[str, float]]]:
-    """Load ``cfg.resume`` into the networks and optimizer; returns the progress and the
-    evaluation history to continue from.
+    """Load ``cfg.resume`` (or its newer sibling ``best.pt``) into the networks and
+    optimizer; returns the progress and the evaluation history to continue from.
 
     Raises:
-        ConfigError: The checkpoint is of another model, of another scenario (without
-            ``resume_new_scenario``), holds no optimizer state (a shipped policy), or
-            already holds ``frames`` frames.
+        ConfigError: The checkpoint is damaged or incomplete, of another model, of
+            another scenario (without ``resume_new_scenario``), holds no optimizer state
+            (a shipped policy), already holds ``frames`` frames, or leaves a budget that
+            is not a whole number of batches.
     """
-    path = Path(cfg.resume)
-    ckpt = load_checkpoint(path)
+    path, ckpt = _newest(Path(cfg.resume))
     model_cfg = plain_model(cfg.model)
     if plain_model(ckpt["model_config"]) != model_cfg:
         raise ConfigError(
@@ -121,17 +140,21 @@ def resume(
             f"resume: {path} holds a policy's weights but no optimizer state (a shipped "
             "policy is stripped); resume from a run's checkpoints/last.pt or best.pt"
         )
-    frames = int(ckpt["frames"])
+    check_training_payload(ckpt, path)
+    frames, batch = ckpt["frames"], cfg.algo.frames_per_batch
     if cfg.frames <= frames:
         raise ConfigError(
             f"resume: the checkpoint has already trained {frames} frames; "
             f"frames={cfg.frames} must be larger to train on"
         )
-    for net, name in zip(nets, ("actor", "critic"), strict=True):
-        net.load_state_dict(ckpt["model"][name])
-    optim.load_state_dict(ckpt["optimizer"])
-    progress = Progress(frames, int(ckpt["iteration"]), float(ckpt.get("best_ttd", float("inf"))))
-    history = list(ckpt.get("history", []))
+    if (cfg.frames - frames) % batch:
+        low = frames + (cfg.frames - frames) // batch * batch
+        nearest = f"{low} or {low + batch}" if low > frames else f"{low + batch}"
+        raise ConfigError(
+            f"resume: frames={cfg.frames} leaves {cfg.frames - frames} frames after the "
+            f"checkpoint's {frames}, not a whole number of batches of "
+            f"algo.frames_per_batch={batch}: use frames={nearest}"
+        )
     changes = scenario_changes(ckpt.get("config", {}), as_plain(cfg))
     if changes and not cfg.resume_new_scenario:
         raise ConfigError(
@@ -139,18 +162,106 @@ def resume(
             "its best TTD does not compare. Pass resume_new_scenario=true to continue "
             "training it here with a fresh best"
         )
-    best = run_dir / "checkpoints" / "best.pt"
+    try:
+        for net, name in zip(nets, ("actor", "critic"), strict=True):
+            net.load_state_dict(ckpt["model"][name])
+        optim.load_state_dict(ckpt["optimizer"])
+    except (RuntimeError, ValueError, KeyError, TypeError) as exc:
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ConfigError(f"resume: {path} does not fit this run's networks: {reason}") from None
+    progress = Progress(frames, ckpt["iteration"], float(ckpt["best_ttd"]))
+    history = list(ckpt.get("history", []))
     if changes:
         progress.best_ttd, history = float("inf"), []
-    elif not best.exists() and (path.parent / "best.pt").is_file():
-        # Resumed into a new folder: bring the best along, or best.pt would be missing
-        # until a later evaluation beats it.
-        source = path.parent / "best.pt"
-        atomic_write(best, lambda fh: fh.write(source.read_bytes()))
-    elif not best.exists():
-        progress.best_ttd = float("inf")
+    else:
+        progress.best_ttd = _best_on_disk(path, run_dir)
     torch.manual_seed(cfg.seed + progress.iteration)
     return progress, history
+
+
+def _newest(path: Path) -> tuple[Path, dict[str, Any]]:
+    """``path`` and its checkpoint, or its sibling ``best.pt`` when that holds more frames.
+
+    ``best.pt`` is written before ``last.pt`` with the same payload, so a ``best.pt``
+    ahead of ``last.pt`` means the kill came during the ``last.pt`` write: resuming from
+    ``best.pt`` continues exactly where the run was, and no evaluation is repeated.
+    """
+    ckpt = load_checkpoint(path)
+    sibling = path.parent / "best.pt"
+    if path.name != "last.pt" or not sibling.is_file():
+        return path, ckpt
+    best = load_checkpoint(sibling)
+    frames, best_frames = ckpt.get("frames"), best.get("frames")
+    if _count(frames) and _count(best_frames) and best_frames > frames:
+        print(
+            f"resume: {sibling} ({best_frames} frames) is newer than {path} ({frames} "
+            "frames, its write was interrupted): resuming from it",
+            file=sys.stderr,
+        )
+        return sibling, best
+    return path, ckpt
+
+
+def _best_on_disk(source: Path, run_dir: Path) -> float:
+    """The TTD a new ``best.pt`` must beat: that of the run folder's ``best.pt`` (brought
+    from ``source``'s folder when resuming into a new one), or infinity without one."""
+    best = run_dir / "checkpoints" / "best.pt"
+    sibling = source.parent / "best.pt"
+    if not best.exists() and sibling.is_file():
+        # Resumed into a new folder: bring the best along, or best.pt would be missing
+        # until a later evaluation beats it.
+        atomic_write(best, lambda fh: fh.write(sibling.read_bytes()))
+    if not best.exists():
+        return float("inf")
+    ckpt = load_checkpoint(best)
+    ttd = ckpt.get("eval", {}).get("ttd", ckpt.get("best_ttd"))
+    if not _number(ttd):
+        raise ConfigError(f"resume: {best} records no evaluation TTD to compare with")
+    return float(ttd)
+
+
+def _count(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _number(value: object) -> bool:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return ok and not math.isnan(value)
+
+
+def check_training_payload(ckpt: dict[str, Any], path: Path) -> None:
+    """Refuse a checkpoint whose training state cannot be resumed from, before any work.
+
+    ``history`` may be missing (runs saved before it was stored); when present it must
+    be a list of evaluation rows, each with integer ``frames``.
+
+    Raises:
+        ConfigError: The first missing or ill-typed field, named.
+    """
+    for key in ("frames", "iteration"):
+        if not _count(ckpt.get(key)):
+            raise ConfigError(
+                f"checkpoint {path}: {key} must be an integer >= 0, got {ckpt.get(key)!r}"
+            )
+    if not _number(ckpt.get("best_ttd")):
+        raise ConfigError(
+            f"checkpoint {path}: best_ttd must be a number, got {ckpt.get('best_ttd')!r}"
+        )
+    history = ckpt.get("history", [])
+    if not isinstance(history, list) or not all(isinstance(row, dict) for row in history):
+        raise ConfigError(f"checkpoint {path}: history must be a list of evaluation rows")
+    if not all(_count(row.get("frames")) for row in history):
+        raise ConfigError(f"checkpoint {path}: a history row has no integer frames")
+    if not isinstance(ckpt.get("eval", {}), dict):
+        raise ConfigError(
+            f"checkpoint {path}: eval must be a dict, got {type(ckpt['eval']).__name__}"
+        )
+    optimizer = ckpt.get("optimizer")
+    if not isinstance(optimizer, dict) or not {"state", "param_groups"} <= set(optimizer):
+        raise ConfigError(
+            f"checkpoint {path}: its optimizer state lacks state or param_groups, so it "
+            "cannot be resumed (it can still be evaluated)"
+        )
 
 
 def scenario_changes(old: dict[str, Any], new: dict[str, Any]) -> list[str]:

@@ -41,6 +41,7 @@ from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.checkpoints import Progress
 from rtaw_marl.training.config import RayConfig, TrainConfig
 from rtaw_marl.training.interop import make_interop_env
+from rtaw_marl.utils.signals import STOP_SIGNALS
 
 __all__ = ["Collection", "build_collector", "learner_device"]
 
@@ -149,13 +150,15 @@ def _worker_env(spec: SimSpec, envs: int, seed: int, threads: int | None) -> Bat
     ``threads`` threads (torch's default, one per core, oversubscribes the cores the
     workers share).
 
-    Worker processes ignore Ctrl-C: the terminal sends SIGINT to the whole process
-    group, and the main process alone must handle it (save, then shut the workers down).
+    Worker processes ignore Ctrl-C and SIGTERM: the terminal and schedulers signal the
+    whole process group, and the main process alone must handle them (save, then shut
+    the workers down); a worker killed by SIGTERM leaks its semaphores.
     """
     if threads is not None:
         torch.set_num_threads(threads)
         if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            for signum in STOP_SIGNALS:
+                signal.signal(signum, signal.SIG_IGN)
     return BatchedWarehouseEnv(spec, envs, seed)
 
 

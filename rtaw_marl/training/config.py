@@ -9,7 +9,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimGroups
-from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.sim.inputs import seed_list, seed_value
 from rtaw_marl.training.logging import LOGGERS
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
@@ -24,6 +24,9 @@ __all__ = [
 
 #: Values of ``device`` (the learner's).
 DEVICES = ("auto", "cpu", "cuda")
+
+#: The largest ``frames``: steps are logged as floats, exact up to 2**53.
+MAX_FRAMES = 2**53
 
 #: Rules an imitation warm start can learn from.
 TEACHERS = ("lookahead", "hindsight")
@@ -159,8 +162,7 @@ class TrainEvalConfig:
         at_least(self, "eval.", 1, "every_frames")
         if not self.seeds:
             raise ConfigError("eval.seeds must name at least one seed")
-        for i, seed in enumerate(self.seeds):
-            seed_value(seed, f"eval.seeds[{i}]")
+        seed_list(self.seeds, "eval.seeds")
 
 
 @dataclass(kw_only=True)
@@ -209,7 +211,9 @@ class TrainConfig(SimGroups):
         model: A model option (:class:`~rtaw_marl.models.config.RTAWConfig`).
         algo: The PPO settings.
         seed: Seed of the whole run (networks, sampling, episodes).
-        frames: Total frames (decisions) to collect (the paper's budget: 4M).
+        frames: Total frames (decisions) to collect: a whole number of batches of
+            ``algo.frames_per_batch``, never rounded (the paper's budget, 4M, in whole
+            batches of 8192 and of 512: 4,005,888).
         torch_threads: torch intra-op threads (1 is fastest for this small network).
         device: Where the learner updates the networks: ``auto`` (``cuda`` when torch
             finds a GPU, else ``cpu``), ``cpu`` or ``cuda``. Collection and evaluation
@@ -232,7 +236,7 @@ class TrainConfig(SimGroups):
     model: Any
     algo: PPOConfig = field(default_factory=PPOConfig)
     seed: int = 0
-    frames: int = 4_000_000
+    frames: int = 4_005_888
     torch_threads: int = 1
     device: str = "auto"
     collector: CollectorConfig = field(default_factory=CollectorConfig)
@@ -253,3 +257,40 @@ class TrainConfig(SimGroups):
             raise ConfigError(f"device must be one of {', '.join(DEVICES)}, got {self.device!r}")
         if self.logger not in LOGGERS:
             raise ConfigError(f"logger must be one of {', '.join(LOGGERS)}, got {self.logger!r}")
+        self._check_budgets()
+
+    def _check_budgets(self) -> None:
+        """Budgets are spent in whole units, never rounded: ``frames`` in batches of
+        ``algo.frames_per_batch``; ``imitation.frames`` in rounds of one decision per
+        simulator (``imitation.rounds x collector.envs_per_worker``)."""
+        batch = self.algo.frames_per_batch
+        if self.frames < batch:
+            raise ConfigError(f"frames={self.frames} is less than one batch ({batch})")
+        if self.frames > MAX_FRAMES:
+            raise ConfigError(
+                f"frames={self.frames} is more than 2**53 = {MAX_FRAMES}: frame counts past "
+                "it are not exact in the logs' steps"
+            )
+        _whole_units("frames", self.frames, batch, "batches of algo.frames_per_batch")
+        if self.imitation.teacher is not None:
+            unit = self.imitation.rounds * self.collector.envs_per_worker
+            _whole_units(
+                "imitation.frames", self.imitation.frames, unit,
+                "imitation.rounds x collector.envs_per_worker",
+            )  # fmt: skip
+
+
+def _whole_units(key: str, value: int, unit: int, what: str) -> None:
+    """Refuse a budget ``value`` that is not a whole number of ``unit``s, naming the
+    nearest valid values.
+
+    Raises:
+        ConfigError: ``key=value is not a multiple of <what> = unit: use a or b``.
+    """
+    if value % unit:
+        low = value // unit * unit
+        nearest = f"{low} or {low + unit}" if low else f"{unit}"
+        raise ConfigError(
+            f"{key}={value} is not a whole number of {what} = {unit} (it is never "
+            f"rounded): use {nearest}"
+        )

@@ -39,9 +39,9 @@ class Evaluator:
         self.history: list[dict[str, float]] = list(history or [])
 
     def run(self, net: Actor, progress: Progress, wall_s: float) -> dict[str, float]:
-        """Evaluate ``net``, update ``progress.best_ttd`` and return the logged row."""
+        """Evaluate ``net`` and return the logged row (``progress.best_ttd`` is left to
+        :class:`~rtaw_marl.training.checkpoints.Checkpoints`, which keeps the best)."""
         ttd = float(np.mean(greedy_ttd(net, self.env, self.seeds)))
-        progress.best_ttd = min(progress.best_ttd, ttd)
         row = {
             "frames": progress.frames,
             "ttd": ttd,

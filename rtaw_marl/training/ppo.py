@@ -10,6 +10,8 @@ with checkpoints (last and best).
 from __future__ import annotations
 
 import copy
+import signal
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,7 +47,7 @@ from rtaw_marl.training.interop import (
 )
 from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
 from rtaw_marl.utils.runs import claim_folder
-from rtaw_marl.utils.signals import deferred_interrupt
+from rtaw_marl.utils.signals import Interrupted, deferred_interrupt
 from rtaw_marl.viz.plots import plot_training_curve
 
 __all__ = ["TrainResult", "greedy_ttd", "train"]
@@ -96,11 +98,76 @@ class Clock:
         self._last = time.perf_counter()
 
 
+class Estimate:
+    """The run's remaining wall time, from the frames/s measured so far and the measured
+    cost of an evaluation; :meth:`report` prints it once, after the first batches.
+
+    Args:
+        cfg: The run's config (budget and evaluation period).
+        frames: Frames at the start of this session (the resume point).
+    """
+
+    #: Runs estimated to take longer than this print their estimate (seconds).
+    LONG_S = 60.0
+    #: Past this the estimate is a warning: the budget is likely a typo (a week).
+    ABSURD_S = 7 * 24 * 3600.0
+    #: Batches measured before the estimate is printed (the first includes start-up).
+    BATCHES = 3
+
+    def __init__(self, cfg: TrainConfig, frames: int) -> None:
+        self.total, self.every, self.start = cfg.frames, cfg.eval.every_frames, frames
+        self.batch, self.batches, self.told = cfg.algo.frames_per_batch, 0, False
+        self.rate = 0.0
+
+    def seconds(self, frames: int, totals: dict[str, float], eval_s: list[float]) -> float:
+        """Seconds left at ``frames``: training at the measured rate plus the evaluations
+        still due at their measured mean cost."""
+        train_s = sum(v for k, v in totals.items() if k != "time/eval_checkpoint_s")
+        self.rate = (frames - self.start) / max(train_s, 1e-9)
+        left = self.total - frames
+        per_eval = sum(eval_s) / len(eval_s) if eval_s else 0.0
+        return left / self.rate + -(-left // self.every) * per_eval
+
+    def report(self, frames: int, totals: dict[str, float], eval_s: list[float]) -> str:
+        """The estimate for the progress bar; prints it once when the run is long."""
+        self.batches += 1
+        seconds = self.seconds(frames, totals, eval_s)
+        due = self.batches >= min(self.BATCHES, -(-(self.total - self.start) // self.batch))
+        if not self.told and (due or seconds > self.ABSURD_S):
+            self.told = True
+            if seconds > self.ABSURD_S:
+                tqdm.write(
+                    f"warning: frames={self.total} would take about {_duration(seconds)} "
+                    f"at the measured {self.rate:.0f} frames/s; Ctrl-C or SIGTERM saves and stops",
+                    file=sys.stderr,
+                )
+            elif seconds > self.LONG_S:
+                tqdm.write(
+                    f"estimated time left: {_duration(seconds)} ({self.total - frames} frames "
+                    f"at {self.rate:.0f} frames/s, evaluations included)",
+                    file=sys.stdout,
+                )
+        return _duration(seconds)
+
+
+def _duration(seconds: float) -> str:
+    """``45s``, ``12m05s``, ``3h07m``, ``4.2 days``, ``3.1e+04 years``."""
+    if seconds < 60:
+        return f"{seconds:.0f}s"
+    if seconds < 3600:
+        return f"{int(seconds // 60)}m{int(seconds % 60):02d}s"
+    if seconds < 48 * 3600:
+        return f"{int(seconds // 3600)}h{int(seconds % 3600 // 60):02d}m"
+    days = seconds / 86400
+    return f"{days:.1f} days" if days < 730 else f"{days / 365.25:.3g} years"
+
+
 def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
     """Train RTAW with PPO as configured; checkpoints and logs go to ``run_dir``.
 
-    The run holds ``run_dir`` (no other run can write there meanwhile). Ctrl-C saves
-    ``last.pt`` and raises ``KeyboardInterrupt`` with a message saying how to resume.
+    The run holds ``run_dir`` (no other run can write there meanwhile). Ctrl-C or
+    SIGTERM saves ``last.pt`` and raises :class:`~rtaw_marl.utils.signals.Interrupted`
+    (exit status ``128 + signal``) with a message saying how to resume.
 
     Raises:
         ConfigError: A config value is invalid, ``run_dir`` cannot be written, is in use,
@@ -148,11 +215,17 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     bar = tqdm(total=cfg.frames, initial=progress.frames, unit="fr", disable=not cfg.progress)
     start = time.perf_counter()
 
+    postfix: dict[str, str] = {}
+    eval_s: list[float] = []
+
     def evaluate_and_save() -> None:
-        row = evaluator.run(_on_cpu(learner.actor_net), progress, time.perf_counter() - start)
+        began = time.perf_counter()
+        row = evaluator.run(_on_cpu(learner.actor_net), progress, began - start)
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
-        bar.set_postfix(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
+        postfix.update(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
+        bar.set_postfix(postfix)
         saver.save(row, evaluator.history)
+        eval_s.append(time.perf_counter() - began)
 
     next_eval = progress.frames + cfg.eval.every_frames
     frames_at_start = progress.frames
@@ -160,8 +233,11 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     # Ctrl-C stops between iterations, never inside an update (see deferred_interrupt).
     with deferred_interrupt() as stop:
         try:
-            if progress.frames == 0:
+            # Not a step the history holds: a kill after the frame-0 evaluation leaves
+            # a last.pt at 0 frames, and its resume must not evaluate frame 0 again.
+            if progress.frames == 0 and not evaluator.history:
                 evaluate_and_save()
+            estimate = Estimate(cfg, progress.frames)
             clock = Clock()
             for data in collector:
                 clock.lap("time/collect_s")
@@ -182,6 +258,8 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
                 for name, seconds in clock.laps.items():
                     totals[name] = totals.get(name, 0.0) + seconds
                 clock.reset()
+                postfix["eta"] = estimate.report(progress.frames, totals, eval_s)
+                bar.set_postfix(postfix)
                 if done or stop.requested:
                     break
         except KeyboardInterrupt:  # a second Ctrl-C: stop now, still save
@@ -191,7 +269,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
             bar.close()
             logger.close()
     if stop.requested:
-        raise KeyboardInterrupt(_interrupted(saver, evaluator.history))
+        raise Interrupted(_interrupted(saver, evaluator.history), stop.signum or signal.SIGINT)
     plot_training_curve(evaluator.history, run_dir / "training_curve.png")
     return TrainResult(
         run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
@@ -245,8 +323,6 @@ def _check(cfg: TrainConfig) -> None:
         raise ConfigError("interop=true runs one PettingZooWrapper env: set collector.workers=1")
     if cfg.interop and cfg.collector.backend != "local":
         raise ConfigError("interop=true runs in this process: set collector.backend=local")
-    if cfg.frames < algo.frames_per_batch:
-        raise ConfigError(f"frames={cfg.frames} is less than one batch ({algo.frames_per_batch})")
 
 
 def build_learner(cfg: TrainConfig, keys: TrainKeys, device: torch.device | None = None) -> Learner:

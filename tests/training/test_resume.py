@@ -151,7 +151,7 @@ def test_ctrl_c_saves_last_and_says_how_to_resume(train_cfg, tmp_path: Path, mon
 def test_ctrl_c_with_two_workers_is_one_line_and_130(tmp_path: Path) -> None:
     """The terminal signals the whole process group: workers must stay quiet."""
     proc = subprocess.Popen(
-        [str(RTAW_TRAIN), *TINY, "frames=1000000", "collector.workers=2", "progress=false",
+        [str(RTAW_TRAIN), *TINY, "frames=1048576", "collector.workers=2", "progress=false",
          f"output_dir={tmp_path / 'run'}"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )  # fmt: skip
