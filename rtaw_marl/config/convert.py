@@ -64,24 +64,48 @@ def check_overrides(cfg: DictConfig, overrides: Sequence[str]) -> None:
     Raises:
         ConfigError: A boolean key was given another value; the message names it.
     """
-    try:
-        parsed = OverridesParser.create().parse_overrides(list(overrides))
-    except HydraException:
-        return  # Hydra has already accepted them; nothing to add
-    for override in parsed:
+    for text in overrides:
+        key = _override_key(text)
+        # Only a boolean key's override is parsed: parsing is quadratic in a list's length
+        # (ANTLR's child lookup), and Hydra hands over seeds='${range:0,100000}' expanded.
+        if key is None or key.startswith("hydra.") or not _is_boolean(cfg, key):
+            continue
+        try:
+            (override,) = OverridesParser.create().parse_overrides([text])
+        except HydraException:
+            continue  # Hydra has already accepted it; nothing to add
         if override.is_delete() or override.is_sweep_override():
             continue
-        key, value = override.key_or_group, override.value()
-        if value is None or isinstance(value, bool) or key.startswith("hydra."):
+        value = override.value()
+        if value is None or isinstance(value, bool):
             continue
         if isinstance(value, str) and "${" in value:
             continue  # an interpolation: its result is typed when it resolves
-        parent_key, _, leaf = key.rpartition(".")
+        raise ConfigError(f"{key} must be true or false, got {value!r}")
+
+
+def _override_key(text: str) -> str | None:
+    """The config key an override sets (``+a.b@pkg=1`` -> ``a.b``); ``None`` for a
+    deletion or anything without ``=``."""
+    head, sep, _ = text.partition("=")
+    if not sep or head.startswith("~"):
+        return None
+    return head.lstrip("+").partition("@")[0].strip() or None
+
+
+def _is_boolean(cfg: DictConfig, key: str) -> bool:
+    """Whether ``key`` names a boolean field of ``cfg`` (a group choice, a list item or
+    an unknown key is not one)."""
+    parent_key, _, leaf = key.rpartition(".")
+    try:
         parent = OmegaConf.select(cfg, parent_key) if parent_key else cfg
-        if not isinstance(parent, DictConfig) or leaf not in parent:
-            continue  # a group choice (scenario=poc), a list item, a hydra key
-        if isinstance(parent._get_node(leaf), BooleanNode):
-            raise ConfigError(f"{key} must be true or false, got {value!r}")
+    except OmegaConfBaseException:
+        return False
+    return (
+        isinstance(parent, DictConfig)
+        and leaf in parent
+        and isinstance(parent._get_node(leaf), BooleanNode)
+    )
 
 
 def to_typed(cfg: DictConfig) -> Any:
@@ -126,6 +150,8 @@ def config_error(exc: BaseException) -> RtawError:
     """
     if isinstance(exc, RtawError):
         return exc
+    if "LexerNoViableAltException" in str(exc):
+        return _unparsable(str(exc))
     if isinstance(exc, MissingConfigException) and exc.options is not None:
         first = str(exc).strip().splitlines()[0]
         options = ", ".join(o for o in exc.options if not o.startswith("_"))
@@ -146,6 +172,20 @@ def config_error(exc: BaseException) -> RtawError:
             return ConfigError(f"unknown config key {key!r}; {listing}")
         return ConfigError(f"config key {key!r}: {first}")
     return ConfigError(first)
+
+
+def _unparsable(text: str) -> ConfigError:
+    """The line for an override Hydra's grammar cannot read (``LexerNoViableAltException:
+    <override>`` then a caret line): unquoted values are ASCII words and paths only, so
+    a non-ASCII value gets the quoted form to type instead."""
+    override = text.partition(":")[2].strip().splitlines()[0].strip()
+    key, sep, value = override.partition("=")
+    if override.isascii() or not sep:
+        return ConfigError(f"cannot parse the override {override!r}")
+    return ConfigError(
+        f"cannot parse the override {override!r}: a value with non-ASCII characters must "
+        f"be quoted, e.g. '{key}=\"{value}\"'"
+    )
 
 
 def _settable(schema: type, group: str) -> str:

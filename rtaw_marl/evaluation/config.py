@@ -9,7 +9,7 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.sim.builder import SimGroups
-from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.sim.inputs import seed_list, seed_value
 from rtaw_marl.utils.checks import at_least, check_fields
 
 __all__ = ["EvalConfig", "RenderConfig", "StudyConfig"]
@@ -59,8 +59,7 @@ class EvalConfig(SimGroups):
         if isinstance(seeds, (list, tuple)):
             if not seeds:
                 raise ConfigError("seeds must name at least one seed")
-            for i, seed in enumerate(seeds):
-                seed_value(seed, f"seeds[{i}]")
+            seed_list(seeds, "seeds")
         else:
             seed_value(seeds, "seeds")
 
@@ -153,10 +152,7 @@ class StudyConfig:
         if self.seeds is not None:
             if not isinstance(self.seeds, (list, tuple)) or not self.seeds:
                 raise ConfigError(f"seeds must be a non-empty list of integers, got {self.seeds}")
-            for i, seed in enumerate(self.seeds):
-                seed_value(seed, f"seeds[{i}]")
-            if len(set(self.seeds)) < len(self.seeds):
-                raise ConfigError(f"seeds must not repeat a seed, got {list(self.seeds)}")
+            seed_list(self.seeds, "seeds")
         for key in ("reuse", "write"):
             if getattr(self, key) and self.docs is None:
                 raise ConfigError(f"{key}=true needs docs=FOLDER (the repository's docs)")

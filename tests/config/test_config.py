@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
+from hydra.core.override_parser.overrides_parser import OverridesParser
 
-from rtaw_marl.config import CONF_DIR, GROUPS, compose, to_typed
+from rtaw_marl.config import CONF_DIR, GROUPS, check_overrides, compose, to_typed
 from rtaw_marl.config.store import APPS
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim import builder
@@ -112,6 +114,28 @@ def test_compose_errors_are_config_errors() -> None:
         to_typed(compose("train", ["+algo.lrr=1"]))
     with pytest.raises(ConfigError, match="available: astar, cbs, direct, sipp"):
         compose("train", ["navigator=dijkstra"])
+
+
+def test_the_override_check_parses_only_boolean_keys(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``seeds='${range:0,100000}'`` reaches the check expanded, and parsing a list is
+    quadratic in its length (100k seeds: minutes): only a boolean key's override is
+    parsed, so the seeds are never re-parsed whatever their number."""
+    parsed: list[list[str]] = []
+    parse = OverridesParser.parse_overrides
+
+    def recording(self: OverridesParser, overrides: list[str]) -> Any:
+        parsed.append(list(overrides))
+        return parse(self, overrides)
+
+    monkeypatch.setattr(OverridesParser, "parse_overrides", recording)
+    cfg = compose("eval", ["scenario=poc", "seeds=[0,1]"])
+    seeds = f"seeds={list(range(100_000))}"
+    parsed.clear()  # Hydra's own parse of the composition's overrides
+    check_overrides(cfg, [seeds, "scenario=poc", "env.num_robots=3", "progress=true"])
+    assert parsed == [["progress=true"]]
+    with pytest.raises(ConfigError, match=r"^lower_bound must be true or false, got 'off'$"):
+        check_overrides(cfg, [seeds, "+lower_bound=off"])
+    assert parsed[-1] == ["+lower_bound=off"]
 
 
 # --------------------------------------------------------------------------- one builder
