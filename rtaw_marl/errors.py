@@ -94,3 +94,19 @@ class UnknownAgentError(EnvUsageError, KeyError):
     def __str__(self) -> str:
         # KeyError's str() is the repr of its argument; keep the message as written.
         return str(self.args[0]) if self.args else ""
+
+
+def usage_error(call: str, closed: bool = False) -> EnvUsageError:
+    """Build the error for ``call`` on an env that is not live.
+
+    Args:
+        call: The call, as the message names it, e.g. ``"env.step()"``.
+        closed: Whether the env was closed (else it was never reset).
+
+    Returns:
+        An :class:`EnvUsageError` (a :class:`ResetNeededError` before the first reset) to
+        raise.
+    """
+    if closed:
+        return EnvUsageError(f"{call} after close(): this env is closed; make a new one")
+    return ResetNeededError(f"{call} before reset(): call env.reset() first")

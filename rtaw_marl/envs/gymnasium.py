@@ -75,6 +75,14 @@ last step's `info` (the same keys at every step, for vectorised envs).
 env's `reset(seed=s)`. `reset()` without a seed draws the episode seed from
 `np_random`, so a seeded sequence of episodes is reproducible.
 
+## Misuse
+
+`step`, `render` and `action_masks` before the first `reset()` raise
+`rtaw_marl.errors.ResetNeededError` (through `gymnasium.make`, Gymnasium's
+`OrderEnforcing` raises its `ResetNeeded` first); any call after `close()` raises
+`EnvUsageError`; `reset(options=...)` takes `None` or a dict with no keys (the env has no
+reset options), anything else raises `EnvUsageError` naming what was passed.
+
 ## Rendering
 
 `render_mode="ansi"`: `render()` returns the grid as text (legend in
@@ -106,9 +114,9 @@ from gymnasium import spaces
 
 from rtaw_marl import register_envs
 from rtaw_marl.envs.observations import AgentViews, ObservationLayout
-from rtaw_marl.envs.pettingzoo import zero_info
+from rtaw_marl.envs.pettingzoo import reset_option_keys, zero_info
 from rtaw_marl.envs.text import render_ansi
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, EnvUsageError, usage_error
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import seed_value
@@ -141,6 +149,8 @@ class WarehouseEnv(gymnasium.Env):
         Raises:
             ConfigError: An unknown or invalid option or key.
         """
+        # Live from reset() to close(); one flag read is all the hot path pays.
+        self._live, self._closed = False, False
         modes = self.metadata["render_modes"]
         if render_mode is not None and render_mode not in modes:
             raise ConfigError(
@@ -165,11 +175,22 @@ class WarehouseEnv(gymnasium.Env):
 
         Raises:
             ConfigError: ``seed`` is neither ``None`` nor an integer ``>= 0``.
+            EnvUsageError: ``options`` is not ``None`` or an empty dict (the env takes no
+                reset options), or the env is closed.
         """
+        if self._closed:
+            raise usage_error("env.reset()", closed=True)
+        if keys := reset_option_keys(options):
+            raise EnvUsageError(
+                f"reset options {keys} are not known: rtaw/warehouse-single-v1's reset "
+                "takes no options"
+            )
         if seed is not None:
             seed = seed_value(seed)
         super().reset(seed=seed)
+        self._live = False  # until the new episode is built (a bad layout raises here)
         self.sim.reset(seed if seed is not None else int(self.np_random.integers(2**63)))
+        self._live = True
         self._views.clear()
         obs, info = self._observe(self.sim.robot, zero_info())
         if self.render_mode == "human":
@@ -182,7 +203,10 @@ class WarehouseEnv(gymnasium.Env):
         Raises:
             InvalidActionError: ``action`` is not a queue slot holding a task, or the
                 episode is over; the env is unchanged.
+            EnvUsageError: Before ``reset()`` (:class:`ResetNeededError`) or after ``close()``.
         """
+        if not self._live:
+            raise usage_error("env.step()", self._closed)
         sim = self.sim
         reward = sim.step(action)
         done = sim.done
@@ -202,12 +226,20 @@ class WarehouseEnv(gymnasium.Env):
 
     def action_masks(self) -> np.ndarray:
         """The legal slots of the current decision, ``bool [N]`` (``MaskablePPO``)."""
+        if not self._live:
+            raise usage_error("env.action_masks()", self._closed)
         return self._mask.astype(bool)
+
+    def close(self) -> None:
+        """End the env's use: every later call raises :class:`EnvUsageError`."""
+        self._live, self._closed = False, True
 
     def render(self) -> str | None:
         """The grid as text (``"ansi"``), printed (``"human"``), or ``None`` (no mode)."""
         if self.render_mode is None:
             return None
+        if not self._live:
+            raise usage_error("env.render()", self._closed)
         text = render_ansi(self.sim)
         if self.render_mode == "human":
             print(text)

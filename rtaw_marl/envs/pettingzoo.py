@@ -193,8 +193,8 @@ from rtaw_marl.errors import (
     ConfigError,
     EnvUsageError,
     InvalidActionError,
-    ResetNeededError,
     UnknownAgentError,
+    usage_error,
 )
 from rtaw_marl.scenarios import scenario as find_scenario
 from rtaw_marl.sim.builder import SimSpec, build_sim
@@ -214,10 +214,6 @@ _SET_BY_RESET = frozenset(
     {"agents", "agent_selection", "rewards", "terminations", "truncations", "infos"}
     | {"num_agents", "_cumulative_rewards"}
 )
-
-
-def _not_reset(call: str) -> ResetNeededError:
-    return ResetNeededError(f"{call} before reset(): call env.reset() first")
 
 
 def reset_option_keys(options: object) -> list[str]:
@@ -255,12 +251,12 @@ class _OrderEnforcing(wrappers.OrderEnforcingWrapper):
 
     def __getattr__(self, name: str) -> Any:
         if name in _SET_BY_RESET and not self._has_reset:
-            raise _not_reset(f"env.{name}")
+            raise usage_error(f"env.{name}")
         return super().__getattr__(name)
 
     def _require_reset(self, call: str) -> None:
         if not self._has_reset:
-            raise _not_reset(call)
+            raise usage_error(call)
 
     def last(self, observe: bool = True) -> tuple[Observation | None, float, bool, bool, Info]:
         """:meth:`raw_env.last`, after the wrapper's check that ``reset`` was called."""
@@ -374,14 +370,8 @@ class raw_env(AECEnv):
     def __getattr__(self, name: str) -> Any:
         # Python calls this only when normal lookup fails, so live reads pay nothing.
         if name in _SET_BY_RESET:
-            raise _not_reset(f"env.{name}")
+            raise usage_error(f"env.{name}")
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-
-    def _misuse(self, call: str) -> EnvUsageError:
-        """The error for ``call`` while the env is not live (before reset, after close)."""
-        if self._closed:
-            return EnvUsageError(f"{call} after close(): this env is closed; make a new one")
-        return _not_reset(call)
 
     def _unknown(self, agent: object) -> UnknownAgentError:
         names = [repr(name) for name in self.possible_agents]
@@ -414,7 +404,7 @@ class raw_env(AECEnv):
             EnvUsageError: ``options`` is not a dict, or the env is closed.
         """
         if self._closed:
-            raise self._misuse("env.reset()")
+            raise usage_error("env.reset()", self._closed)
         if keys := reset_option_keys(options):
             warnings.warn(
                 f"reset options {keys} ignored: warehouse_v1's reset takes no options",
@@ -453,7 +443,7 @@ class raw_env(AECEnv):
             EnvUsageError: Before ``reset()`` (:class:`ResetNeededError`) or after ``close()``.
         """
         if not self._live:
-            raise self._misuse("env.observe()")
+            raise usage_error("env.observe()", self._closed)
         try:
             index = self._index[agent]
         except (KeyError, TypeError):
@@ -469,14 +459,14 @@ class raw_env(AECEnv):
             equals ``observe(possible_agents[i])``. Shared until the next decision.
         """
         if not self._live:
-            raise self._misuse("env.observe_all()")
+            raise usage_error("env.observe_all()", self._closed)
         features, masks = self._views.observe_all()
         return {"observation": features, "action_mask": masks}
 
     def state(self) -> np.ndarray:
         """The global state ``float32 [3M + 7N]``: robot table, then queue rows."""
         if not self._live:
-            raise self._misuse("env.state()")
+            raise usage_error("env.state()", self._closed)
         return state_vector(self.sim)
 
     # ------------------------------------------------------------------ step
@@ -489,7 +479,7 @@ class raw_env(AECEnv):
             EnvUsageError: Before ``reset()`` (:class:`ResetNeededError`) or after ``close()``.
         """
         if not self._live:
-            raise self._misuse("env.step()")
+            raise usage_error("env.step()", self._closed)
         agent = self.agent_selection
         terminated = self.terminations.get(agent)
         if terminated is None:
@@ -546,7 +536,7 @@ class raw_env(AECEnv):
         the final observation of ``agent_selection`` (the last agent removed), reward 0
         (handed out before its removal), the episode's flags and infos."""
         if not self._live:
-            raise self._misuse("env.last()")
+            raise usage_error("env.last()", self._closed)
         agent = self.agent_selection
         if agent in self.terminations:
             return super().last(observe)
@@ -557,10 +547,10 @@ class raw_env(AECEnv):
     # ------------------------------------------------------------------ render
     def render(self) -> str | None:
         """The grid as text (``"ansi"``), printed (``"human"``), or ``None`` (no mode)."""
-        if not self._live:
-            raise self._misuse("env.render()")
         if self.render_mode is None:
             return None
+        if not self._live:
+            raise usage_error("env.render()", self._closed)
         text = render_ansi(self.sim)
         if self.render_mode == "human":
             print(text)

@@ -25,6 +25,12 @@ Finished simulators are reset by TorchRL's ``_reset`` mechanism (collectors do i
 automatically). Simulator ``b`` draws its episode seeds from
 ``numpy.random.default_rng([seed, b])``; :attr:`episode_seeds` holds the seeds of the
 current episodes, so any episode can be replayed in the PettingZoo env.
+
+Misuse raises the project's errors: ``step`` (and :meth:`episode_metrics`) before the
+first reset :class:`~rtaw_marl.errors.ResetNeededError`, anything after ``close()``
+:class:`~rtaw_marl.errors.EnvUsageError`, as do keyword arguments to ``reset`` (TorchRL
+hands them to ``_reset``, and none is known here: seeds come from ``set_seed`` and
+:meth:`reset_to`) and an :meth:`episode_metrics` index outside ``0..B-1``.
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ from rtaw_marl.envs.features import (
     decision_features,
     feature_shapes,
 )
-from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.errors import ConfigError, EnvUsageError, InvalidActionError, usage_error
 from rtaw_marl.sim.builder import SimFactory, SimSpec
 from rtaw_marl.sim.config import SimBuffers
 from rtaw_marl.sim.inputs import seed_value
@@ -66,6 +72,8 @@ class BatchedWarehouseEnv(EnvBase):
         if int(num_envs) < 1:
             raise ConfigError(f"num_envs must be >= 1, got {num_envs}")
         super().__init__(batch_size=torch.Size([num_envs]), device="cpu")
+        # Live from the first reset to close(); one flag read per batched step.
+        self._live, self._closed = False, False
         factory = SimFactory(spec)
         b, m, n = int(num_envs), spec.env.num_robots, spec.env.queue_len
         self.num_envs, self.num_robots, self.queue_len = b, m, n
@@ -121,6 +129,11 @@ class BatchedWarehouseEnv(EnvBase):
 
     # ------------------------------------------------------------------ reset / step
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
+        if kwargs:
+            raise EnvUsageError(
+                f"reset() got unknown keyword arguments {sorted(kwargs)}; seed the env with "
+                "set_seed(seed) or reset_to(seeds)"
+            )
         if tensordict is not None and "_reset" in tensordict.keys():  # noqa: SIM118
             which = np.flatnonzero(tensordict["_reset"].reshape(self.num_envs).numpy())
         else:
@@ -128,6 +141,8 @@ class BatchedWarehouseEnv(EnvBase):
         return self._reset_sims({int(i): int(self._seed_rngs[i].integers(2**62)) for i in which})
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
+        if not self._live:
+            raise usage_error("env.step()", self._closed)
         slots = self._checked_slots(tensordict["action"])
         reward = np.empty((self.num_envs, 1), dtype=np.float32)
         done = np.zeros((self.num_envs, 1), dtype=bool)
@@ -195,10 +210,13 @@ class BatchedWarehouseEnv(EnvBase):
 
     def _reset_sims(self, seeds: dict[int, int]) -> TensorDictBase:
         """Reset simulator ``i`` with ``seeds[i]`` for each key; observe the whole batch."""
+        if self._closed:
+            raise usage_error("env.reset()", closed=True)
         for i, seed in seeds.items():
             self.episode_seeds[i] = seed
             self.sims[i].reset(seed)
             self._sync(i)
+        self._live = True
         out = self._observation()
         zeros = torch.zeros((self.num_envs, 1), dtype=torch.bool)
         out.update({"done": zeros, "terminated": zeros.clone(), "truncated": zeros.clone()})
@@ -231,5 +249,26 @@ class BatchedWarehouseEnv(EnvBase):
 
     # ------------------------------------------------------------------ results
     def episode_metrics(self, i: int) -> dict[str, float | int]:
-        """Metrics of simulator ``i``'s current (or just finished) episode."""
+        """Metrics of simulator ``i``'s current (or just finished) episode.
+
+        Raises:
+            EnvUsageError: ``i`` is not in ``0..B-1``, or the env was never reset or is
+                closed.
+        """
+        if not self._live:
+            raise usage_error("env.episode_metrics()", self._closed)
+        if (
+            isinstance(i, bool)
+            or not isinstance(i, (int, np.integer))
+            or not 0 <= i < self.num_envs
+        ):
+            raise EnvUsageError(
+                f"episode_metrics: no simulator {i!r}; the env has {self.num_envs} "
+                f"(0..{self.num_envs - 1})"
+            )
         return self.sims[i].metrics().as_dict()
+
+    def close(self, *, raise_if_closed: bool = True) -> None:
+        """Close the env: every later ``reset`` or ``step`` raises :class:`EnvUsageError`."""
+        self._live, self._closed = False, True
+        super().close(raise_if_closed=raise_if_closed)
