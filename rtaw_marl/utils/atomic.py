@@ -12,10 +12,20 @@ from typing import BinaryIO
 
 from rtaw_marl.errors import DiskFullError
 
-__all__ = ["DISK_FULL", "atomic_write", "disk_full_guard"]
+__all__ = ["DISK_FULL", "atomic_write", "disk_full_guard", "temp_name"]
 
 #: The errnos of a write that found no room: the disk is full, or the user's quota is.
 DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT})
+
+#: How many random characters :func:`tempfile.mkstemp` puts in a name.
+_RANDOM_CHARS = 8
+
+
+def temp_name(name: str) -> str:
+    """The shape of :func:`atomic_write`'s temporary file for ``name`` (the ``X`` are
+    random): ``.<name>.XXXXXXXX.tmp``. Its length is what a path check must allow for.
+    """
+    return f".{name}.{'X' * _RANDOM_CHARS}.tmp"
 
 
 @contextmanager
@@ -59,6 +69,8 @@ def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> Path:
 
 def _atomic_write(path: Path, write: Callable[[BinaryIO], None]) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
+    # Named as temp_name() says; the leading dot hides it, and a killed write's
+    # leftover is recognisable (.last.pt.*.tmp).
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     # mkstemp creates the file 0600; give the result the usual permissions instead.
     umask = os.umask(0)
