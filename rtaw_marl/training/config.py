@@ -261,7 +261,8 @@ class TrainConfig(SimGroups):
 
     def _check_budgets(self) -> None:
         """Budgets are spent in whole units, never rounded: ``frames`` in batches of
-        ``algo.frames_per_batch``; ``imitation.frames`` in rounds of one decision per
+        ``algo.frames_per_batch`` (after the checkpoint's frames, on resume);
+        ``imitation.frames`` in rounds of one decision per
         simulator (``imitation.rounds x collector.envs_per_worker``)."""
         batch = self.algo.frames_per_batch
         if self.frames < batch:
@@ -271,7 +272,8 @@ class TrainConfig(SimGroups):
                 f"frames={self.frames} is more than 2**53 = {MAX_FRAMES}: frame counts past "
                 "it are not exact in the logs' steps"
             )
-        _whole_units("frames", self.frames, batch, "batches of algo.frames_per_batch")
+        if self.resume is None:  # a resume counts from its checkpoint (checkpoints.resume)
+            _whole_units("frames", self.frames, batch, "batches of algo.frames_per_batch")
         if self.imitation.teacher is not None:
             unit = self.imitation.rounds * self.collector.envs_per_worker
             _whole_units(
