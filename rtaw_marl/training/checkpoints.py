@@ -58,7 +58,8 @@ class Progress:
 
 
 class Checkpoints:
-    """``best.pt`` when an evaluation is the best yet, then ``last.pt``.
+    """``best.pt`` when an evaluation is strictly better than the best so far (a tie
+    keeps the earlier one), then ``last.pt``.
 
     Args:
         cfg: The run's config (stored in every checkpoint).
