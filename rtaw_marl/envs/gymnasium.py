@@ -180,6 +180,8 @@ class WarehouseEnv(gymnasium.Env):
         """
         if self._closed:
             raise usage_error("env.reset()", closed=True)
+        # Not live until the new episode is built: a reset that raises leaves none to step.
+        self._live = False
         if keys := reset_option_keys(options):
             raise EnvUsageError(
                 f"reset options {keys} are not known: rtaw/warehouse-single-v1's reset "
@@ -188,7 +190,6 @@ class WarehouseEnv(gymnasium.Env):
         if seed is not None:
             seed = seed_value(seed)
         super().reset(seed=seed)
-        self._live = False  # until the new episode is built (a bad layout raises here)
         self.sim.reset(seed if seed is not None else int(self.np_random.integers(2**63)))
         self._live = True
         self._views.clear()

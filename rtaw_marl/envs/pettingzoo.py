@@ -254,6 +254,14 @@ class _OrderEnforcing(wrappers.OrderEnforcingWrapper):
             raise usage_error(f"env.{name}")
         return super().__getattr__(name)
 
+    def reset(self, seed: int | None = None, options: dict | None = None) -> None:
+        """The wrapper's reset; one that raises leaves the wrapper unreset, as the env."""
+        try:
+            super().reset(seed=seed, options=options)
+        except BaseException:
+            self._has_reset = False
+            raise
+
     def _require_reset(self, call: str) -> None:
         if not self._has_reset:
             raise usage_error(call)
@@ -405,6 +413,8 @@ class raw_env(AECEnv):
         """
         if self._closed:
             raise usage_error("env.reset()", self._closed)
+        # Not live until the new episode is built: a reset that raises leaves none to step.
+        self._live = False
         if keys := reset_option_keys(options):
             warnings.warn(
                 f"reset options {keys} ignored: warehouse_v1's reset takes no options",
@@ -416,7 +426,6 @@ class raw_env(AECEnv):
             episode_seed = seed
         else:
             episode_seed = int(self.np_random.integers(2**63))
-        self._live = False  # until the new episode is built (a bad layout raises here)
         self.sim.reset(episode_seed)
         self._views.clear()
         self.agents = self.possible_agents[:]
