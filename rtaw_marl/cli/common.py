@@ -24,11 +24,13 @@ from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.atomic import atomic_write
+from rtaw_marl.utils.signals import Interrupted, terminate_as_interrupt
 
 __all__ = [
     "SweepFailures",
     "exit_on_user_error",
     "hydra_entry",
+    "learned_files",
     "policies_from_cfg",
     "policy_names",
     "typed",
@@ -41,8 +43,8 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
     A composition error (unknown key, option or value type) becomes one ``error: ...``
     line and exit status 2, like every other user error, instead of Hydra's multi-line
     report and status 1. In a sweep, a failed job prints its own line and the others
-    still run; the sweep then exits 2 (:class:`SweepFailures`). Ctrl-C prints one line
-    and exits 130.
+    still run; the sweep then exits 2 (:class:`SweepFailures`). Ctrl-C and SIGTERM
+    print one line and exit ``128 + signal`` (130, 143).
     """
     register_configs()
 
@@ -63,13 +65,14 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
         # Let composition errors reach this frame instead of Hydra's own report.
         os.environ["HYDRA_FULL_ERROR"] = "1"
         try:
-            hydra_main()
-        except (HydraException, OmegaConfBaseException, RtawError) as exc:
-            print(f"error: {config_error(exc)}".splitlines()[0], file=sys.stderr)
+            with terminate_as_interrupt():
+                hydra_main()
+        except (HydraException, OmegaConfBaseException, RtawError, OSError) as exc:
+            print(f"error: {_one_line(exc)}", file=sys.stderr)
             sys.exit(2)
         except KeyboardInterrupt as exc:
             print(f"interrupted{': ' + str(exc) if str(exc) else ''}", file=sys.stderr)
-            sys.exit(130)
+            sys.exit(exc.exit_status if isinstance(exc, Interrupted) else 130)
         finally:
             if previous is None:
                 os.environ.pop("HYDRA_FULL_ERROR", None)
@@ -78,6 +81,16 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
 
     main.__doc__ = f"Console entry point of the {config_name!r} config."
     return main
+
+
+def _one_line(exc: BaseException) -> str:
+    """The user's line for an error: an ``OSError`` from the file system (a path too
+    long, a full disk, no permission) names the path and the reason."""
+    # Hydra's MissingConfigException is an OSError too: its own line comes first.
+    if isinstance(exc, OSError) and not isinstance(exc, (RtawError, HydraException)):
+        where = f": {exc.filename}" if exc.filename else ""
+        return f"{exc.strerror or exc}{where}".splitlines()[0]
+    return str(config_error(exc)).splitlines()[0]
 
 
 #: Written into a sweep job's folder when the job fails on a user error.
@@ -96,8 +109,8 @@ def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig]
     def wrapper(cfg: DictConfig) -> Any:
         try:
             return fn(cfg)
-        except (RtawError, HydraException, OmegaConfBaseException) as exc:
-            message = str(config_error(exc)).splitlines()[0]
+        except (RtawError, HydraException, OmegaConfBaseException, OSError) as exc:
+            message = _one_line(exc)
             job = _sweep_job()
             if job is None:
                 print(f"error: {message}", file=sys.stderr)
@@ -189,17 +202,38 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
                 f"policy={name} needs the training extra ({exc.name!r} is not installed): "
                 "pip install 'rtaw_marl[train]'"
             ) from None
-        from rtaw_marl.policies.pretrained.registry import pretrained_path
-
         threads = int(cfg.torch_threads)
-        for source in sources[name]:
-            if name == "checkpoint":
-                policy = load_policy(source, torch_threads=threads)
-            else:
-                path = pretrained_path(source)  # a shipped name only, never a file
-                policy = load_policy(path, name=f"rtaw:{source}", torch_threads=threads)
-            policies[policy.name] = policy
+        for label, path in _learned(name, sources[name]).items():
+            policies[label] = load_policy(path, name=label, torch_threads=threads)
     return policies
+
+
+def learned_files(cfg: Any, names: list[str]) -> dict[str, Path]:
+    """The file each learned policy of :func:`policies_from_cfg` was loaded from, by its
+    label (what an evaluation journal hashes); call it once they have loaded, with the
+    names as :func:`policy_names` spells them."""
+    from rtaw_marl.policies.pretrained.registry import pretrained_path
+
+    files: dict[str, Path] = {}
+    for option in ("checkpoint", "pretrained"):
+        if option not in names:
+            continue
+        for label, source in _learned(option, as_list(getattr(cfg, option))).items():
+            # A checkpoint= value that is no file loaded as a shipped name.
+            path = Path(source)
+            files[label] = path if path.is_file() else pretrained_path(str(source))
+    return files
+
+
+def _learned(option: str, sources: list[str]) -> dict[str, str | Path]:
+    """Label (``rtaw:<source>``) -> what ``load_policy`` loads for each ``checkpoint=``
+    value (a path, or a shipped name) or ``pretrained=`` value (a shipped name only,
+    never a file)."""
+    from rtaw_marl.policies.pretrained.registry import pretrained_path
+
+    if option == "pretrained":
+        return {f"rtaw:{source}": pretrained_path(source) for source in sources}
+    return {f"rtaw:{source}": source for source in sources}
 
 
 def as_list(value: object) -> list[str]:

@@ -12,7 +12,9 @@ Examples::
 
 from __future__ import annotations
 
+import signal
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
 from hydra.core.hydra_config import HydraConfig
@@ -23,19 +25,29 @@ from rtaw_marl.cli.common import (
     as_list,
     exit_on_user_error,
     hydra_entry,
+    learned_files,
     policies_from_cfg,
+    policy_names,
     typed,
 )
 from rtaw_marl.config import as_plain
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import comparisons, evaluate, format_table, write_json_atomic
 from rtaw_marl.evaluation.config import EvalConfig
-from rtaw_marl.evaluation.journal import EpisodeJournal, journal_path
+from rtaw_marl.evaluation.evaluate import TimeEstimate
+from rtaw_marl.evaluation.journal import (
+    EpisodeJournal,
+    file_digest,
+    journal_path,
+    with_file_digests,
+)
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.inputs import seed_list
 from rtaw_marl.utils.runs import claim_file
+from rtaw_marl.utils.signals import Interrupted
 
 #: The main baseline every policy is compared with (when it is evaluated).
 REFERENCE = "mpdm"
@@ -54,11 +66,10 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
     """Evaluate ``cfg.policy`` on ``cfg.seeds`` and write the results; returns them."""
     cfg = typed(cfg)
     names = as_list(cfg.policy)
-    seeds = [cfg.seeds] if isinstance(cfg.seeds, int) else list(cfg.seeds)
     if not names:
         raise ConfigError("policy must name at least one policy")
-    if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
-        raise ConfigError(f"seeds must be a non-empty list of integers, got {seeds}")
+    # Distinct: a seed listed twice would count one episode twice.
+    seeds = seed_list(cfg.seeds)
     output = Path(cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json")
     # Checked and held before any work, so a bad path does not cost a whole evaluation
     # and two runs never write the same results.
@@ -69,20 +80,30 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
 def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path) -> dict:
     sim = build_sim(cfg.sim_spec())
     print(f"layout {sim.layout.describe()}")
+    names = policy_names(names)
     policies = policies_from_cfg(cfg, names, sim)
     if cfg.compare_to is not None and cfg.compare_to not in policies:
         raise ConfigError(
             f"compare_to={cfg.compare_to} is not an evaluated policy; "
             f"evaluated: {', '.join(policies)}"
         )
-    setting = {k: v for k, v in as_plain(cfg).items() if k not in _NOT_SETTING}
-    journal = EpisodeJournal(journal_path(output), setting, resume=cfg.resume)
-    if journal.episodes:
-        print(f"resume: {len(journal.episodes)} finished episodes from {journal.path}")
-    total = len(policies) * len(seeds) * sim.config.num_tasks
+    journal = _journal(cfg, names, output, policies)
+    todo = sum(journal.get(name, seed) is None for name in policies for seed in seeds)
     try:
-        with tqdm(total=total, unit="dec", disable=not cfg.progress, leave=False) as bar:
-            results = evaluate(sim, policies, seeds, on_decisions=bar.update, journal=journal)
+        # smoothing=0: the bar's ETA is the run's average rate, not the last policy's.
+        with tqdm(
+            total=todo * sim.config.num_tasks,
+            unit="dec",
+            disable=not cfg.progress,
+            leave=False,
+            smoothing=0,
+        ) as bar:
+            estimate = TimeEstimate(announce=tqdm.write, show=bar.set_postfix_str)
+            results = evaluate(
+                sim, policies, seeds, on_decisions=bar.update, journal=journal, on_seed=estimate
+            )
+    except KeyboardInterrupt as exc:
+        raise _interrupted(exc, journal) from None
     finally:
         journal.close()
     bound, bound_time = _lower_bound(cfg, sim, seeds, results)
@@ -98,6 +119,37 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
     path = write_json_atomic(output, payload)
     print(f"results: {path}")
     return payload
+
+
+def _journal(
+    cfg: EvalConfig, names: list[str], output: Path, policies: Mapping[str, object]
+) -> EpisodeJournal:
+    """The episode journal beside ``output``: the setting with its input files as
+    contents hashes, each learned policy's episodes keyed by its file's hash."""
+    setting = with_file_digests({k: v for k, v in as_plain(cfg).items() if k not in _NOT_SETTING})
+    sources = {label: file_digest(path) for label, path in learned_files(cfg, names).items()}
+    journal = EpisodeJournal(journal_path(output), setting, resume=cfg.resume, sources=sources)
+    if journal.episodes:
+        print(f"resume: {len(journal.episodes)} finished episodes from {journal.path}")
+    for policy, (count, _) in journal.stale.items():
+        if policy in policies:
+            print(
+                f"resume: the file of {policy} has changed since {count} of its episodes "
+                "were journalled (another sha256): they run again"
+            )
+    return journal
+
+
+def _interrupted(exc: KeyboardInterrupt, journal: EpisodeJournal) -> Interrupted:
+    """Ctrl-C or SIGTERM: the one line says what is kept and how to go on."""
+    signum = exc.signum if isinstance(exc, Interrupted) else signal.SIGINT
+    if not journal.episodes:
+        return Interrupted(signum=signum)
+    return Interrupted(
+        f"{journal.held()} kept in {journal.path}; run the same command with resume=true "
+        "to continue",
+        signum=signum,
+    )
 
 
 def _lower_bound(

@@ -8,10 +8,11 @@ from typing import Protocol
 
 from rtaw_marl.evaluation.journal import EpisodeJournal
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.inputs import seed_list
 from rtaw_marl.sim.mapf.conflicts import check_schedule
 from rtaw_marl.sim.metrics import EpisodeMetrics
 
-__all__ = ["SimPolicy", "evaluate", "run_episode"]
+__all__ = ["SimPolicy", "TimeEstimate", "duration", "evaluate", "run_episode"]
 
 _PROGRESS_EVERY = 256
 
@@ -63,17 +64,23 @@ def evaluate(
     seeds: Sequence[int],
     on_decisions: Callable[[int], None] | None = None,
     journal: EpisodeJournal | None = None,
+    on_seed: Callable[[int, int], None] | None = None,
 ) -> dict[str, dict[str, list[float]]]:
     """Evaluate every policy on every seed.
+
+    Seed by seed, every policy on each: the episodes run so far then sample every
+    policy's cost alike, so a time estimate from the first seeds holds for the rest.
 
     Args:
         sim: The simulator.
         policies: Policies by name.
-        seeds: Episode seeds.
-        on_decisions: Progress callback (see :func:`run_episode`); episodes replayed
-            from the journal count all their decisions at once.
+        seeds: Episode seeds (distinct).
+        on_decisions: Progress callback (see :func:`run_episode`) for the episodes that
+            run; episodes replayed from the journal are not counted.
         journal: Where each finished episode is recorded as it finishes; episodes it
             already holds (a resumed evaluation) are taken from it instead of run.
+        on_seed: Called after each seed with episodes to run, once they have run, with
+            the number of such seeds done and their total (drives :class:`TimeEstimate`).
 
     Returns:
         ``{policy: {metric: [one value per seed]}}`` with every :class:`EpisodeMetrics`
@@ -82,24 +89,32 @@ def evaluate(
         out of another's way) and ``cbs_fallbacks`` per episode.
 
     Raises:
+        ConfigError: A seed is not an integer >= 0 or is given twice.
         ScheduleError: A collision-aware episode's executed schedule breaks a rule
             (a conflict, an illegal move, a task not served).
     """
-    results: dict[str, dict[str, list[float]]] = {}
-    for name, policy in policies.items():
-        per_metric: dict[str, list[float]] = {}
-        for seed in seeds:
-            row = journal.get(name, int(seed)) if journal is not None else None
+    seeds = seed_list(seeds)
+    results: dict[str, dict[str, list[float]]] = {name: {} for name in policies}
+    todo = [s for s in seeds if any(_journalled(journal, n, s) is None for n in policies)]
+    done = 0
+    for seed in seeds:
+        for name, policy in policies.items():
+            row = _journalled(journal, name, seed)
             if row is None:
-                row = _episode(sim, policy, int(seed), on_decisions)
+                row = _episode(sim, policy, seed, on_decisions)
                 if journal is not None:
-                    journal.record(name, int(seed), row)
-            elif on_decisions is not None:
-                on_decisions(sim.config.num_tasks)
+                    journal.record(name, seed, row)
             for key, value in row.items():
-                per_metric.setdefault(key, []).append(value)
-        results[name] = per_metric
+                results[name].setdefault(key, []).append(value)
+        if done < len(todo) and todo[done] == seed:
+            done += 1
+            if on_seed is not None:
+                on_seed(done, len(todo))
     return results
+
+
+def _journalled(journal: EpisodeJournal | None, policy: str, seed: int) -> dict[str, float] | None:
+    return None if journal is None else journal.get(policy, seed)
 
 
 def _episode(
@@ -114,3 +129,67 @@ def _episode(
         check_schedule(sim.layout, sim.schedule(), expected_tasks=metrics.tasks_served)
     row.update(sim.executor.stats())
     return row
+
+
+class TimeEstimate:
+    """The time an evaluation will take, from its first seeds (an ``on_seed`` callback
+    of :func:`evaluate`).
+
+    The first seed's episodes pay for warm-up (compilation, caches), so once two seeds
+    are done the rate is that of the seeds after the first; a first seed that alone
+    took over :attr:`WARM_UP_S` is long enough to estimate from. The estimate is
+    announced once, in one line, when the whole run is to take over :attr:`LONG_S`;
+    every later seed refreshes ``show`` (the progress bar's postfix).
+
+    Args:
+        announce: Receives the one ``estimated time: ...`` line (``print``).
+        show: Receives the time left after each seed (e.g. ``bar.set_postfix_str``).
+        clock: Seconds, monotonic.
+    """
+
+    LONG_S = 60.0
+    WARM_UP_S = 10.0
+
+    def __init__(
+        self,
+        announce: Callable[[str], None] = print,
+        show: Callable[[str], None] | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.announce, self.show, self.clock = announce, show, clock
+        self.start = clock()
+        self.first: float | None = None  # when the first seed was done
+        self.announced = False
+
+    def __call__(self, done: int, total: int) -> None:
+        """Seed ``done`` of ``total`` (those with episodes to run) has finished."""
+        now = self.clock()
+        if done == 1:
+            self.first = now
+        if done >= 2 and self.first is not None:
+            per_seed = (now - self.first) / (done - 1)
+        elif now - self.start >= self.WARM_UP_S:
+            per_seed = (now - self.start) / done
+        else:
+            return
+        left = per_seed * (total - done)
+        if self.show is not None:
+            self.show(f"~{duration(left)} left")
+        whole = now - self.start + left
+        if not self.announced and whole > self.LONG_S:
+            self.announced = True
+            self.announce(
+                f"estimated time: {duration(whole)} in all, {duration(left)} left "
+                f"({per_seed:.3g} s per seed, {total} seeds to run)"
+            )
+
+
+def duration(seconds: float) -> str:
+    """``42 s``, ``12.5 min``, ``3.2 h``, ``2.1 days``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.1f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"

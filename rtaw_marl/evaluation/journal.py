@@ -1,15 +1,24 @@
 """Finished episodes on disk as they finish, so a killed evaluation loses none of them.
 
 ``rtaw-eval`` writes ``results.json`` once, at the end. Beside it, the journal
-``<name>.episodes.jsonl`` gets one JSON line per finished episode (policy, seed and its
-metrics), each appended in one write and fsynced. A kill can only tear the line being
-written; reading keeps the complete lines and drops the torn tail. ``resume=true``
-replays the journal's episodes instead of running them again, if it was written by the
-same evaluation setting (its first line records the config).
+``<name>.episodes.jsonl`` gets one JSON line per finished episode (policy, seed, the
+contents hash of the policy's file and its metrics), each appended in one write and
+fsynced. A kill can only tear the line being written; reading keeps the complete lines
+and drops the torn tail. ``resume=true`` replays the journal's episodes instead of
+running them again, if it was written by the same evaluation setting (its first line
+records the config).
+
+Episodes are matched by the *contents* of the files they depend on, never by path:
+the setting holds each input file (``layout.path``, ``tasks.path``) as its sha256
+(:func:`with_file_digests`), so a map replaced at the same path refuses the resume and
+names the key; each learned policy's episodes carry its checkpoint's sha256, so a
+checkpoint replaced at the same path runs its own episodes again (the others are
+kept). A journal of the first format, which matched paths, is refused.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from collections.abc import Mapping
@@ -17,10 +26,14 @@ from pathlib import Path
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.utils.atomic import disk_full_guard
 
-__all__ = ["FORMAT", "EpisodeJournal", "journal_path"]
+__all__ = ["FORMAT", "EpisodeJournal", "file_digest", "journal_path", "with_file_digests"]
 
-FORMAT = "rtaw_marl.episodes/1"
+FORMAT = "rtaw_marl.episodes/2"
+#: The first format: episodes keyed by file paths (a replaced file was replayed).
+_PATH_KEYED = "rtaw_marl.episodes/1"
+_DIGEST = "sha256:"
 
 
 def journal_path(output: str | Path) -> Path:
@@ -29,25 +42,65 @@ def journal_path(output: str | Path) -> Path:
     return output.with_name(f"{output.stem}.episodes.jsonl")
 
 
+def file_digest(path: str | Path) -> str:
+    """``sha256:<hex>`` of a file's contents (read in chunks: checkpoints and maps are
+    megabytes, read once per run)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(chunk)
+    return _DIGEST + digest.hexdigest()
+
+
+def with_file_digests(setting: Mapping[str, Any]) -> dict[str, Any]:
+    """``setting`` with every file it names (a ``path`` key at any depth: the layout's,
+    the task stream's) replaced by the file's :func:`file_digest`, so that two settings
+    match when their files have the same contents, wherever they lie."""
+    out: dict[str, Any] = {}
+    for key, value in setting.items():
+        if isinstance(value, Mapping):
+            out[key] = with_file_digests(value)
+        elif key == "path" and isinstance(value, str):
+            out[key] = file_digest(value)
+        else:
+            out[key] = value
+    return out
+
+
 class EpisodeJournal:
     """The finished episodes of one evaluation setting.
 
     Args:
         path: The journal file.
         setting: What makes two evaluations' episodes interchangeable (the config
-            without the policy list, seeds and output options); stored in the header.
+            without the policy list, seeds and output options; input files as their
+            digests, :func:`with_file_digests`); stored in the header.
         resume: Keep the episodes of an existing journal with the same setting;
             otherwise an existing journal is replaced.
+        sources: Policy name -> :func:`file_digest` of the file it was loaded from (a
+            checkpoint, a shipped policy); rules have none. A journalled episode of a
+            policy whose file has changed is not replayed (see :attr:`stale`).
 
     Raises:
-        ConfigError: ``resume`` is set and the journal holds another setting, or is not
-            a journal.
+        ConfigError: ``resume`` is set and the journal holds another setting, is of the
+            path-keyed first format, or is not a journal.
+        DiskFullError: The disk filled while writing; the journal keeps what it holds.
     """
 
-    def __init__(self, path: str | Path, setting: Mapping[str, Any], resume: bool) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        setting: Mapping[str, Any],
+        resume: bool,
+        sources: Mapping[str, str] | None = None,
+    ) -> None:
         self.path = Path(path)
         self.setting = json.loads(json.dumps(setting))
+        self.sources = dict(sources or {})
         self.episodes: dict[tuple[str, int], dict[str, float]] = {}
+        #: Policy -> ``(journalled episodes not replayed, their digest)``: its file changed.
+        self.stale: dict[str, tuple[int, str | None]] = {}
+        self._file = None
         if resume and self.path.exists():
             self._replay()
             mode = "ab"
@@ -63,17 +116,32 @@ class EpisodeJournal:
 
     def record(self, policy: str, seed: int, metrics: Mapping[str, float]) -> None:
         """Append one finished episode (durable when this returns)."""
+        entry = {"policy": policy, "source": self.sources.get(policy), "seed": seed}
+        kept = self._kept()
+        # Counted first: a signal during the fsync (the slow part) leaves the line on
+        # disk, and the interrupt's message counts it.
         self.episodes[(policy, seed)] = dict(metrics)
-        self._append({"policy": policy, "seed": seed, "metrics": dict(metrics)})
+        self._append({**entry, "metrics": dict(metrics)}, kept)
 
     def close(self) -> None:
-        """Close the file (every line is already on disk)."""
-        self._file.close()
+        """Close the file (every line is already on disk); closing twice is harmless."""
+        if self._file is not None and not self._file.closed:
+            with disk_full_guard(self.path, self._kept()):
+                self._file.close()
 
-    def _append(self, entry: Mapping[str, Any]) -> None:
-        self._file.write((json.dumps(entry) + "\n").encode())
-        self._file.flush()
-        os.fsync(self._file.fileno())
+    def _kept(self) -> str:
+        return f"the journal keeps {self.held()}: run the same command with resume=true to continue"
+
+    def held(self) -> str:
+        """``3 finished episodes``: what the journal holds, for a message."""
+        n = len(self.episodes)
+        return f"{n} finished episode{'' if n == 1 else 's'}"
+
+    def _append(self, entry: Mapping[str, Any], kept: str | None = None) -> None:
+        with disk_full_guard(self.path, kept or self._kept()):
+            self._file.write((json.dumps(entry) + "\n").encode())
+            self._file.flush()
+            os.fsync(self._file.fileno())
 
     def _replay(self) -> None:
         data = self.path.read_bytes()
@@ -83,11 +151,29 @@ class EpisodeJournal:
             with open(self.path, "r+b") as fh:
                 fh.truncate(len(complete))
         lines = complete.decode(errors="replace").splitlines()
+        self._check_header(lines[0] if lines else "")
+        for line in lines[1:]:
+            entry = json.loads(line)
+            policy, source = entry["policy"], entry.get("source")
+            if source != self.sources.get(policy):
+                count, _ = self.stale.get(policy, (0, None))
+                self.stale[policy] = (count + 1, source)
+                continue
+            self.episodes[(policy, int(entry["seed"]))] = entry["metrics"]
+
+    def _check_header(self, line: str) -> None:
         try:
-            header = json.loads(lines[0]) if lines else {}
+            header = json.loads(line) if line else {}
         except json.JSONDecodeError:
             header = {}
-        if header.get("format") != FORMAT:
+        fmt = header.get("format") if isinstance(header, dict) else None
+        if fmt == _PATH_KEYED:
+            raise ConfigError(
+                f"resume=true: {self.path} is an older journal ({fmt}) that matched episodes "
+                "by file paths, not contents, so its episodes cannot be trusted; drop "
+                "resume=true to run them again"
+            )
+        if fmt != FORMAT:
             raise ConfigError(f"resume=true: {self.path} is not an episode journal")
         if header["setting"] != self.setting:
             raise ConfigError(
@@ -95,9 +181,6 @@ class EpisodeJournal:
                 f"(differs in {', '.join(_differences(header['setting'], self.setting))}); "
                 "use another output or drop resume"
             )
-        for line in lines[1:]:
-            entry = json.loads(line)
-            self.episodes[(entry["policy"], int(entry["seed"]))] = entry["metrics"]
 
 
 def _differences(old: Mapping[str, Any], new: Mapping[str, Any], prefix: str = "") -> list[str]:
@@ -108,5 +191,12 @@ def _differences(old: Mapping[str, Any], new: Mapping[str, Any], prefix: str = "
         if isinstance(a, Mapping) and isinstance(b, Mapping):
             out += _differences(a, b, f"{prefix}{key}.")
         elif a != b:
-            out.append(f"{prefix}{key}: {a!r} -> {b!r}")
+            out.append(f"{prefix}{key}: {_shown(a)} -> {_shown(b)}")
     return out
+
+
+def _shown(value: Any) -> str:
+    """A value for a difference line; a digest as its first 12 hex digits."""
+    if isinstance(value, str) and value.startswith(_DIGEST):
+        return f"contents sha256 {value[len(_DIGEST) : len(_DIGEST) + 12]}"
+    return repr(value)

@@ -26,10 +26,11 @@ import numpy as np
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import SimPolicy, evaluate
-from rtaw_marl.evaluation.journal import EpisodeJournal
+from rtaw_marl.evaluation.journal import EpisodeJournal, file_digest, with_file_digests
 from rtaw_marl.policies import BASELINES, BaselinesConfig, make_baseline
 from rtaw_marl.scenarios import Scenario
 from rtaw_marl.sim.builder import build_sim
+from rtaw_marl.sim.inputs import seed_list
 from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = [
@@ -75,7 +76,7 @@ class PolicyRef:
             return make_baseline(self.name, sim.navigator, sim.layout.scale, params)
         from rtaw_marl.policies.network import load_policy  # torch: only when needed
 
-        return load_policy(self._path(), name=label)
+        return load_policy(self.path(), name=label)
 
     def loads(self) -> str | None:
         """None if the policy can be built, else why not (a missing or broken file)."""
@@ -84,12 +85,13 @@ class PolicyRef:
         try:
             from rtaw_marl.policies.network import load_policy
 
-            load_policy(self._path())
+            load_policy(self.path())
         except (ConfigError, ModuleNotFoundError) as err:
             return " ".join(str(err).split())
         return None
 
-    def _path(self) -> Path:
+    def path(self) -> Path:
+        """The file of a learned policy (a checkpoint, a shipped policy's)."""
         if self.kind == "checkpoint":
             return Path(self.name)
         from rtaw_marl.policies.pretrained.registry import pretrained_path
@@ -207,7 +209,8 @@ def run_study(
         The per-seed TTDs of every cell and label; a learned policy whose checkpoint
         is missing or does not load is left out, with one warning line on stderr.
     """
-    cells = study.cells(list(seeds))
+    seeds = seed_list(seeds)  # a seed given twice would count one episode twice
+    cells = study.cells(seeds)
     if study.run is not None:
         return study.run(cells, output, workers, resume)
     kept = _reusable(reuse, list(seeds))
@@ -232,7 +235,7 @@ def run_study(
         ttd[key] = {k: merged[k] for k in order if k in merged}
         seconds[key] = secs
         print(f"done {key}", file=sys.stderr, flush=True)
-    return StudyResult(seeds=list(seeds), ttd=ttd, seconds=seconds)
+    return StudyResult(seeds=seeds, ttd=ttd, seconds=seconds)
 
 
 _WARNED: set[str] = set()
@@ -272,13 +275,17 @@ def _run_cell(job: Job) -> tuple[str, Ttd, dict[str, float]]:
     cell, todo, path, resume = job
     sim = build_sim(cell.scenario.spec())
     policies = {label: ref.build(sim, label) for label, ref in todo.items()}
-    setting = {
-        "cell": cell.key,
-        "sim": cell.scenario.spec().as_dict(),
-        "policies": {k: [p.kind, p.name, dict(p.params)] for k, p in todo.items()},
-    }
+    # Files by contents: a map or checkpoint replaced at the same path is not replayed.
+    setting = with_file_digests(
+        {
+            "cell": cell.key,
+            "sim": cell.scenario.spec().as_dict(),
+            "policies": {k: [p.kind, p.name, dict(p.params)] for k, p in todo.items()},
+        }
+    )
+    sources = {k: file_digest(p.path()) for k, p in todo.items() if p.kind != "rule"}
     path.parent.mkdir(parents=True, exist_ok=True)
-    journal = EpisodeJournal(path, setting, resume=resume)
+    journal = EpisodeJournal(path, setting, resume=resume, sources=sources)
     try:
         res = evaluate(sim, policies, cell.seeds, journal=journal)
     finally:

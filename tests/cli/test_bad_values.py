@@ -19,7 +19,8 @@ import pytest
 
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.errors import LayoutError, RtawError, TaskFileError
-from rtaw_marl.evaluation.config import EvalConfig
+from rtaw_marl.evaluation import evaluate
+from rtaw_marl.evaluation.config import EvalConfig, StudyConfig
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.layout import open_grid
@@ -84,6 +85,16 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     # Seeds.
     ("eval", ["seeds=[0,-1]"], "seeds[1] must be an integer >= 0, got -1"),
     ("eval", ["seeds=-3"], "seeds must be an integer >= 0, got -3"),
+    # One episode counted three times would be "significant".
+    ("eval", ["seeds=[0,0,0]"], "seeds lists a seed more than once: 0 (3 times); each seed"),
+    ("eval", ["seeds=[4,1,4,1]"], "seeds lists a seed more than once: 4 (2 times), 1 (2 times)"),
+    # Hydra's grammar reads unquoted values as ASCII: the line shows the quoted form.
+    (
+        "eval",
+        ["layout.path=/tmp/ü/map.txt"],
+        """cannot parse the override 'layout.path=/tmp/ü/map.txt': a value with non-ASCII """
+        """characters must be quoted, e.g. 'layout.path="/tmp/ü/map.txt"'""",
+    ),
     ("train", ["seed=-1"], "seed must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[-1]"], "eval.seeds[0] must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[]"], "eval.seeds must name at least one seed"),
@@ -200,6 +211,21 @@ PYTHON_CASES: list[tuple[str, Callable[[], object], str]] = [
         "eval_seed_float",
         lambda: EvalConfig(**_groups(), seeds=[0, 1.5]),
         "seeds[1] must be an integer >= 0, got 1.5",
+    ),
+    (
+        "eval_seeds_repeated",
+        lambda: EvalConfig(**_groups(), seeds=[3, 3]),
+        "seeds lists a seed more than once: 3 (2 times)",
+    ),
+    (
+        "study_seeds_repeated",
+        lambda: StudyConfig(seeds=[0, 1, 0]),
+        "seeds lists a seed more than once: 0 (2 times)",
+    ),
+    (
+        "evaluate_seeds_repeated",
+        lambda: evaluate(build_sim(SimSpec.of()), {}, [7, 7]),
+        "seeds lists a seed more than once: 7 (2 times)",
     ),
     (
         "frames_nan",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from rtaw_marl.evaluation import evaluate
+from rtaw_marl.evaluation.evaluate import TimeEstimate, duration
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
@@ -47,3 +48,100 @@ def test_waiting_makes_ttd_no_shorter_than_astar() -> None:
         ttd[nav] = sim.task_ttd[:10]
     assert (ttd["sipp"] >= ttd["astar"]).all()
     assert (ttd["cbs"] >= ttd["astar"]).all()
+
+
+class _Order:
+    """A policy that records which (policy, seed) episodes it plays."""
+
+    def __init__(self, name: str, log: list[tuple[str, int]]) -> None:
+        self.name, self.log, self.inner = name, log, make_baseline("mpdm")
+
+    def reset(self, seed: int | None = None) -> None:
+        self.log.append((self.name, int(seed)))
+        self.inner.reset(seed)
+
+    def act_sim(self, sim) -> int:
+        return self.inner.act_sim(sim)
+
+
+def test_episodes_run_seed_by_seed_and_on_seed_counts_the_seeds_run(tmp_path) -> None:
+    """Every policy plays a seed before the next seed starts, so the first seeds time
+    every policy; ``on_seed`` counts only seeds with episodes to run (not replayed)."""
+    from rtaw_marl.evaluation.journal import EpisodeJournal
+
+    sim = build_sim(SimSpec.of({**ENV, "num_tasks": 5}))
+    log: list[tuple[str, int]] = []
+    policies = {n: _Order(n, log) for n in ("a", "b")}
+    journal = EpisodeJournal(tmp_path / "j.jsonl", {}, resume=False)
+    first = evaluate(sim, policies, [3, 1], journal=journal)
+    assert log == [("a", 3), ("b", 3), ("a", 1), ("b", 1)]
+    journal.close()
+    journal = EpisodeJournal(tmp_path / "j.jsonl", {}, resume=True)
+    log.clear()
+    calls: list[tuple[int, int]] = []
+
+    def on_seed(done: int, total: int) -> None:
+        calls.append((done, total))
+
+    again = evaluate(
+        sim, policies, [3, 1, 2, 0], journal=journal, on_seed=lambda *c: calls.append(c)
+    )
+    assert log == [("a", 2), ("b", 2), ("a", 0), ("b", 0)]
+    assert calls == [(1, 2), (2, 2)]
+    assert again["a"]["ttd"][:2] == first["a"]["ttd"]
+
+
+class _Clock:
+    """Seconds that advance by ``step`` on every reading."""
+
+    def __init__(self, step: float) -> None:
+        self.now, self.step = -step, step
+
+    def __call__(self) -> float:
+        self.now += self.step
+        return self.now
+
+
+def test_time_estimate_announces_a_long_run_once_from_the_seeds_after_the_first() -> None:
+    """30 s per seed after a 5 s first seed (warm-up, left out of the rate): one line,
+    once; the bar's postfix follows every seed."""
+    lines: list[str] = []
+    shown: list[str] = []
+    readings = iter([0.0, 5.0, 35.0, 65.0, 95.0])
+    estimate = TimeEstimate(lines.append, shown.append, clock=lambda: next(readings))
+    for done in range(1, 5):
+        estimate(done, 10)
+    assert lines == [
+        "estimated time: 4.6 min in all, 4.0 min left (30 s per seed, 10 seeds to run)"
+    ]
+    assert shown == ["~4.0 min left", "~3.5 min left", "~3.0 min left"]
+
+
+def test_time_estimate_from_one_long_first_seed() -> None:
+    """A first seed past the warm-up bound is long enough to estimate from at once."""
+    lines: list[str] = []
+    estimate = TimeEstimate(lines.append, clock=iter([0.0, 90.0]).__next__)
+    estimate(1, 10)
+    assert lines == [
+        "estimated time: 15.0 min in all, 13.5 min left (90 s per seed, 10 seeds to run)"
+    ]
+
+
+def test_time_estimate_is_silent_for_a_short_run() -> None:
+    """A run estimated at under a minute prints nothing; the postfix still shows."""
+    lines: list[str] = []
+    shown: list[str] = []
+    estimate = TimeEstimate(lines.append, shown.append, clock=_Clock(1.0))
+    for done in range(1, 6):
+        estimate(done, 5)
+    assert lines == []
+    assert shown == ["~3 s left", "~2 s left", "~1 s left", "~0 s left"]
+
+
+@pytest.mark.parametrize(
+    ("seconds", "text"),
+    [(0.4, "0 s"), (89, "89 s"), (90, "1.5 min"), (5399, "90.0 min"), (5400, "1.5 h"),
+     (48 * 3600, "2.0 days")],
+)  # fmt: skip
+def test_duration(seconds: float, text: str) -> None:
+    assert duration(seconds) == text
