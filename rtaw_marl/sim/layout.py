@@ -12,7 +12,8 @@ Supported files (UTF-8, a byte-order mark and CRLF line ends are read as such):
   error, not a free cell. Blank lines between rows are skipped, as SBPL does.
 * MovingAI ``.map`` (octile): ``type octile`` (optional), ``height H``, ``width W``,
   ``map``, then exactly ``H`` lines of ``W`` characters of MovingAI's legend: ``.``,
-  ``G``, ``S`` passable, ``@``, ``O``, ``T``, ``W`` blocked.
+  ``G``, ``S`` passable, ``@``, ``O``, ``T``, ``W`` blocked; and LoRR's ``E``
+  (emitter, passable), so the League of Robot Runners' maps load as LoRR reads them.
 * ASCII ``.txt``/``.grid``: rows of ``.`` (free) and ``@`` (blocked), no header.
 
 In ``.map`` and ASCII files any other character, a ragged row, a blank line inside the
@@ -58,9 +59,11 @@ LAYOUT_FORMATS = {
 
 #: MovingAI's legend (movingai.com/benchmarks/formats.html): the passable characters,
 #: the blocked ones (``W``, water, blocks ground robots) and how a message lists them.
-#: Any other character is an error, not a free cell.
+#: Any other character is an error, not a free cell. ``E`` is LoRR's emitter cell, an
+#: extension its maps use (LoRR blocks ``@`` and ``T`` only, so it is passable).
 _MOVINGAI_LEGEND = (
-    ".GS", "@OTW", "MovingAI cells are '.', 'G', 'S' (passable) and '@', 'O', 'T', 'W' (blocked)"
+    ".GSE", "@OTW",
+    "MovingAI cells are '.', 'G', 'S', LoRR's 'E' (passable) and '@', 'O', 'T', 'W' (blocked)",
 )  # fmt: skip
 _ASCII_LEGEND = (".", "@", "ASCII layouts use '.' (free) and '@' (blocked)")
 _FOUR_CONNECTED = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], dtype=bool)

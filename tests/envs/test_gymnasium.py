@@ -18,7 +18,7 @@ import pytest
 
 from rtaw_marl import GYMNASIUM_ENV_ID, warehouse_v1
 from rtaw_marl.envs.gymnasium import WarehouseEnv
-from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.errors import ConfigError, InvalidActionError, ResetNeededError
 
 SMALL: dict[str, Any] = {
     "num_robots": 3,
@@ -149,7 +149,9 @@ def test_action_masks_and_info_mask_agree() -> None:
 @pytest.mark.parametrize("action", [2, 3, 4, -1, 1.0, "1", None, np.array([0])], ids=repr)
 def test_invalid_actions_raise_and_change_nothing(action: Any) -> None:
     env = WarehouseEnv(**{**SMALL, "num_tasks": 2})
-    with pytest.raises(InvalidActionError, match="call reset"):
+    with pytest.raises(
+        ResetNeededError, match=r"env\.step\(\) before reset\(\): call env\.reset\(\) first"
+    ):
         env.step(0)
     _, info = env.reset(seed=0)
     np.testing.assert_array_equal(info["action_mask"], [1, 1, 0, 0])

@@ -272,7 +272,7 @@ def test_movingai_legend_is_read_exactly(tmp_path: Path) -> None:
     assert layout.obstacles.tolist() == [[False, False, False, True, True, True, True]]
 
 
-MOVINGAI_LEGEND = "MovingAI cells are '.', 'G', 'S' (passable) and '@', 'O', 'T', 'W' (blocked)"
+MOVINGAI_LEGEND = "MovingAI cells are '.', 'G', 'S', LoRR's 'E' (passable) and '@', 'O', 'T', 'W' (blocked)"
 ASCII_LEGEND = "ASCII layouts use '.' (free) and '@' (blocked)"
 
 
@@ -284,12 +284,6 @@ ASCII_LEGEND = "ASCII layouts use '.' (free) and '@' (blocked)"
             "hash.map",
             "height 2\nwidth 3\nmap\n.#.\n###\n",
             "line 4, column 2: undefined cell character '#'",
-        ),
-        # LoRR's emitter cell is not in MovingAI's legend.
-        (
-            "lorr.map",
-            "height 1\nwidth 3\nmap\n.E.\n",
-            "line 4, column 2: undefined cell character 'E'",
         ),
         (
             "lower.map",
@@ -525,3 +519,14 @@ def test_diagonal_cells_are_not_connected() -> None:
     layout = Layout(np.array([[False, True], [True, False]]))
     assert layout.num_components == 2
     assert len(layout.main_cells) == 1
+
+
+def test_lorr_warehouse_map_loads_as_lorr_reads_it(maps_dir: Path) -> None:
+    """LoRR's maps use an ``E`` (emitter) cell; LoRR blocks ``@`` and ``T`` only."""
+    path = maps_dir / "lorr" / "maps" / "warehouse_large.map"
+    rows = path.read_text().splitlines()[4:]
+    blocked = np.array([[c in "@T" for c in row] for row in rows])
+    assert "E" in "".join(rows)
+    layout = load_layout(path)
+    assert (layout.width, layout.height) == (500, 140)
+    assert np.array_equal(layout.obstacles, blocked)
