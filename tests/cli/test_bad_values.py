@@ -51,6 +51,7 @@ BASE = {
     "eval": ["scenario=poc", "progress=false"],
     "train": ["scenario=poc", "progress=false"],
     "render": ["scenario=poc"],
+    "study": ["study=transfer"],
 }
 
 _WALLED_RUN = [
@@ -95,6 +96,7 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
         """cannot parse the override 'layout.path=/tmp/ü/map.txt': a value with non-ASCII """
         """characters must be quoted, e.g. 'layout.path="/tmp/ü/map.txt"'""",
     ),
+    ("study", ["seeds=[2,2]"], "seeds lists a seed more than once: 2 (2 times)"),
     ("train", ["seed=-1"], "seed must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[-1]"], "eval.seeds[0] must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[]"], "eval.seeds must name at least one seed"),

@@ -154,6 +154,32 @@ def test_a_checkpoint_file_is_a_learned_policy(tmp_path: Path) -> None:
     assert by_file.ttd == by_name.ttd
 
 
+def test_a_checkpoint_replaced_at_the_same_path_is_not_replayed(tmp_path: Path) -> None:
+    """The cell's journal keys the checkpoint's episodes by its contents: replaced, a
+    resumed study runs them again (as a fresh study does); the rule's are replayed."""
+    import shutil
+
+    from rtaw_marl.policies.pretrained.registry import pretrained_path
+
+    ckpt = tmp_path / "policy.pt"
+    shutil.copy(pretrained_path("C_astar_m10_long_plus"), ckpt)
+    policies = {"MPDM": rule("mpdm"), "RTAW+": checkpoint(ckpt)}
+    first = run_study(_study(policies), [0, 1], tmp_path / "run")
+    shutil.copy(pretrained_path("C_astar_m10_long"), ckpt)
+    resumed = run_study(_study(policies), [0, 1], tmp_path / "run", resume=True)
+    fresh = run_study(_study(policies), [0, 1], tmp_path / "fresh")
+    assert resumed.ttd == fresh.ttd
+    assert resumed.ttd["C, M=10"]["RTAW+"] != first.ttd["C, M=10"]["RTAW+"]
+    assert resumed.ttd["C, M=10"]["MPDM"] == first.ttd["C, M=10"]["MPDM"]
+    entries = (tmp_path / "run" / "C_M_10.episodes.jsonl").read_text().splitlines()[1:]
+    assert len(entries) == 4 + 2  # both labels on two seeds, then RTAW+ again
+
+
+def test_a_study_refuses_a_repeated_seed(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match=r"^seeds lists a seed more than once: 0 \(2 times\)"):
+        run_study(_study(), [0, 1, 0], tmp_path)
+
+
 def test_reuse_learned_takes_every_stored_label_and_runs_the_missing_ones(tmp_path: Path) -> None:
     policies = {"MPDM": rule("mpdm"), "lookahead": rule("lookahead"),
                 "RTAW+": learned("C_astar_m10_long_plus")}  # fmt: skip
