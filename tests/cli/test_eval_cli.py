@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hydra.core.override_parser.overrides_parser import OverridesParser
 from omegaconf import DictConfig
 from scipy import stats as scipy_stats
 
@@ -408,3 +409,35 @@ def test_the_old_name_of_pretrained_still_works_with_one_warning(tmp_path: Path,
     old, new = (json.loads(p.read_text())["policies"] for p in out.values())
     assert old.keys() == new.keys()
     assert [v["ttd"] for v in old.values()] == [v["ttd"] for v in new.values()]
+
+
+def test_a_large_seed_range_is_never_parsed_expanded(
+    cli, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``seeds='${range:0,100000}'`` reaches the first episode with every seed, and no
+    override is parsed in its expanded form (parsing a list is quadratic in its length:
+    10k seeds took 12.6 s to the first episode, 100k minutes)."""
+    import rtaw_marl.cli.eval as eval_cli
+
+    texts: list[str] = []
+    parse = OverridesParser.parse_overrides
+
+    def recording(self: OverridesParser, overrides: list[str]) -> object:
+        texts.extend(overrides)
+        return parse(self, overrides)
+
+    seen: list[int] = []
+
+    def first_episode(sim: object, policies: object, seeds: list[int], **kwargs: object) -> None:
+        seen.append(len(seeds))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(OverridesParser, "parse_overrides", recording)
+    monkeypatch.setattr(eval_cli, "evaluate", first_episode)
+    seeds = "seeds=${range:0,100000}"
+    args = ["scenario=poc", "policy=mpdm", "progress=false", seeds, f"output={tmp_path / 'r.json'}"]
+    result = cli("eval", *args)
+    assert (result.code, seen) == (130, [100_000])
+    # Everything parsed is an override as typed (Hydra's own parse), never the expansion.
+    assert seeds in texts
+    assert set(texts) <= {*args, "hydra.mode=RUN"}
