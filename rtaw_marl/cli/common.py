@@ -43,8 +43,10 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
     A composition error (unknown key, option or value type) becomes one ``error: ...``
     line and exit status 2, like every other user error, instead of Hydra's multi-line
     report and status 1. In a sweep, a failed job prints its own line and the others
-    still run; the sweep then exits 2 (:class:`SweepFailures`). Ctrl-C and SIGTERM
-    print one line and exit ``128 + signal`` (130, 143).
+    still run; the sweep then exits 2 (:class:`SweepFailures`). An ``OSError`` (a path
+    too long, no permission) is one line naming the file, as a user error is. Ctrl-C
+    and SIGTERM print one ``interrupted`` line (what the task kept, if it says) and exit
+    ``128 + signal`` (130, 143).
     """
     register_configs()
 
@@ -99,6 +101,9 @@ FAILED_MARKER = "FAILED"
 
 def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
     """Turn user errors into one ``error: ...`` line on stderr and exit status 2.
+
+    An ``OSError`` that escapes the task (the file system's: a path too long, no
+    permission, a folder that cannot be made) counts as one: its line names the file.
 
     In a sweep the line names the job (number and overrides), and the job returns
     instead of ending the process, so the other jobs still run; it leaves a ``FAILED``

@@ -8,6 +8,13 @@ Examples::
     rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=[runs/a/best.pt,runs/b/best.pt]
     rtaw-eval policy=[mpdm,rbts,hindsight] compare_to=rbts lower_bound=true
     rtaw-eval ... output=runs/big/results.json resume=true   # after a kill: skip finished episodes
+
+Episodes run seed by seed (every policy on a seed, then the next seed), so that a run
+estimated to take over a minute prints ``estimated time: ...`` from its first seeds;
+the progress bar counts the decisions still to run and shows the time left. Ctrl-C or
+SIGTERM stops with one line saying how many finished episodes the journal keeps (exit
+130 or 143); the same command with ``resume=true`` continues. The journal matches
+episodes by the contents of the files they depend on (map, task file, checkpoints).
 """
 
 from __future__ import annotations
