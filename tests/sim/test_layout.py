@@ -272,7 +272,9 @@ def test_movingai_legend_is_read_exactly(tmp_path: Path) -> None:
     assert layout.obstacles.tolist() == [[False, False, False, True, True, True, True]]
 
 
-MOVINGAI_LEGEND = "MovingAI cells are '.', 'G', 'S', LoRR's 'E' (passable) and '@', 'O', 'T', 'W' (blocked)"
+MOVINGAI_LEGEND = (
+    "MovingAI cells are '.', 'G', 'S', LoRR's 'E' (passable) and '@', 'O', 'T', 'W' (blocked)"
+)
 ASCII_LEGEND = "ASCII layouts use '.' (free) and '@' (blocked)"
 
 
