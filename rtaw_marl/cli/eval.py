@@ -80,7 +80,7 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
     output = Path(cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json")
     # Checked and held before any work, so a bad path does not cost a whole evaluation
     # and two runs never write the same results.
-    with claim_file(output):
+    with claim_file(output, siblings=(journal_path(output).name,)):
         return _evaluate(cfg, names, seeds, output)
 
 

@@ -88,13 +88,26 @@ def test_eval_output_path_too_long(cli, tmp_path: Path) -> None:
 def test_eval_output_name_leaving_no_room_for_its_lock_and_temporary_file(
     cli, tmp_path: Path
 ) -> None:
-    """250 characters fit NAME_MAX, ``.<name>.XXXXXXXX.tmp`` (264) does not."""
-    out = tmp_path / ("n" * 250)
+    """250 characters fit NAME_MAX, ``.<name>.XXXXXXXX.tmp`` (264) does not (with a
+    suffix the temporary file is longer than the journal ``<stem>.episodes.jsonl``)."""
+    out = tmp_path / ("n" * 245 + ".json")
     message = _one_error(cli("eval", *QUICK, f"output={out}"))
     assert message == (
         f"output={_short(str(out))}: the file name (250 characters) is too long for the "
-        f"files written beside it: '.{'n' * 23}...{'n' * 11}.XXXXXXXX.tmp' is 264 bytes "
+        f"files written beside it: '.{'n' * 23}...{'n' * 6}.json.XXXXXXXX.tmp' is 264 bytes "
         "and names on its filesystem are at most 255; use a name of at most 241 bytes"
+    )
+    assert _nothing_but_hydra(tmp_path)
+
+
+def test_eval_output_name_leaving_no_room_for_its_journal(cli, tmp_path: Path) -> None:
+    """Without a suffix, the journal ``<name>.episodes.jsonl`` is the longest file
+    written beside the output: 245 characters fit the temporary file, not the journal."""
+    out = tmp_path / ("n" * 245)
+    message = _one_error(cli("eval", *QUICK, f"output={out}"))
+    assert message.endswith(
+        "'nnnnnnnnnnnnnnnnnnnnnnnn...nnnnnnnnn.episodes.jsonl' is 260 bytes and names on "
+        "its filesystem are at most 255; use a name of at most 240 bytes"
     )
     assert _nothing_but_hydra(tmp_path)
 
