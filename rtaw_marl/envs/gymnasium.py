@@ -119,7 +119,7 @@ from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.errors import ConfigError, EnvUsageError, usage_error
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.sim.inputs import draw_training_seed, seed_value
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
 __all__ = ["WarehouseEnv", "deprecated_env"]
@@ -190,7 +190,7 @@ class WarehouseEnv(gymnasium.Env):
         if seed is not None:
             seed = seed_value(seed)
         super().reset(seed=seed)
-        self.sim.reset(seed if seed is not None else int(self.np_random.integers(2**63)))
+        self.sim.reset(seed if seed is not None else draw_training_seed(self.np_random))
         self._live = True
         self._views.clear()
         obs, info = self._observe(self.sim.robot, zero_info())

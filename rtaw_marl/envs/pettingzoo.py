@@ -123,7 +123,8 @@ They are there from `reset()` on, as zeros, so that vectorising wrappers and Tor
 `reset(seed=s)` takes `None` or an integer `>= 0` (else `ConfigError`). A seed fixes the
 episode (tasks, starts, noise) and reseeds `np_random` (a NumPy `Generator`;
 `np_random_seed` is `s`); `reset()` without a seed draws the episode seed from
-`np_random`, so a seeded sequence of episodes is reproducible.
+`np_random`, so a seeded sequence of episodes is reproducible, and never from the seeds
+reserved for results (0-1999: evaluation and selection; `rtaw_marl.sim.inputs`).
 
 ## Misuse
 
@@ -200,7 +201,7 @@ from rtaw_marl.scenarios import scenario as find_scenario
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.distances import DistanceModel
-from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.sim.inputs import draw_training_seed, seed_value
 from rtaw_marl.sim.metrics import EpisodeMetrics
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
 
@@ -402,7 +403,8 @@ class raw_env(AECEnv):
     # ------------------------------------------------------------------ reset
     def reset(self, seed: int | None = None, options: dict | None = None) -> None:
         """Start an episode; ``seed`` fixes tasks, starts and noise and reseeds
-        ``np_random``; without a seed the episode seed is drawn from ``np_random``.
+        ``np_random``; without a seed the episode seed is drawn from ``np_random``, outside
+        the reserved seeds 0-1999.
 
         ``options`` is ``None`` or a dict; the env takes no options, so a dict's keys are
         ignored with a ``UserWarning`` (PettingZoo's ``api_test`` passes a dummy key).
@@ -425,8 +427,9 @@ class raw_env(AECEnv):
             self.np_random, self.np_random_seed = seeding.np_random(seed)
             episode_seed = seed
         else:
-            episode_seed = int(self.np_random.integers(2**63))
+            episode_seed = draw_training_seed(self.np_random)
         self.sim.reset(episode_seed)
+        self.episode_seed = episode_seed
         self._views.clear()
         self.agents = self.possible_agents[:]
         self.rewards = dict.fromkeys(self.agents, 0.0)

@@ -23,7 +23,8 @@ Keys (batch size ``[B]``):
 
 Finished simulators are reset by TorchRL's ``_reset`` mechanism (collectors do it
 automatically). Simulator ``b`` draws its episode seeds from
-``numpy.random.default_rng([seed, b])``; :attr:`episode_seeds` holds the seeds of the
+``numpy.random.default_rng([seed, b])``, never a seed reserved for results (0-1999,
+:data:`~rtaw_marl.sim.inputs.RESERVED_SEEDS`); :attr:`episode_seeds` holds the seeds of the
 current episodes, so any episode can be replayed in the PettingZoo env.
 
 Misuse raises the project's errors: ``step`` (and :meth:`episode_metrics`) before the
@@ -53,7 +54,7 @@ from rtaw_marl.envs.features import (
 from rtaw_marl.errors import ConfigError, EnvUsageError, InvalidActionError, usage_error
 from rtaw_marl.sim.builder import SimFactory, SimSpec
 from rtaw_marl.sim.config import SimBuffers
-from rtaw_marl.sim.inputs import seed_value
+from rtaw_marl.sim.inputs import draw_training_seed, seed_value
 
 __all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]
 
@@ -138,7 +139,7 @@ class BatchedWarehouseEnv(EnvBase):
             which = np.flatnonzero(tensordict["_reset"].reshape(self.num_envs).numpy())
         else:
             which = range(self.num_envs)
-        return self._reset_sims({int(i): int(self._seed_rngs[i].integers(2**62)) for i in which})
+        return self._reset_sims({int(i): draw_training_seed(self._seed_rngs[i]) for i in which})
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
         if not self._live:

@@ -37,6 +37,7 @@ from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 
 from rtaw_marl.envs.observations import Features
 from rtaw_marl.envs.pettingzoo import raw_env
+from rtaw_marl.sim.inputs import training_seed
 
 __all__ = ["GROUP", "WarehouseWrapper"]
 
@@ -53,6 +54,9 @@ class WarehouseWrapper(PettingZooWrapper):
             ``"state"``.
         seed: Seed of the first reset.
         device: Device of the output tensors (default CPU).
+        training: Map every seed given to the wrapper (``seed``, ``set_seed``) through
+            :func:`~rtaw_marl.sim.inputs.training_seed`, so that no episode it plays is
+            an evaluation or selection episode (seeds 0-1999); what training routes use.
 
     Raises:
         TypeError: ``env`` is not the warehouse env.
@@ -65,12 +69,14 @@ class WarehouseWrapper(PettingZooWrapper):
         return_state: bool = False,
         seed: int | None = None,
         device: torch.device | str | None = None,
+        training: bool = False,
     ) -> None:
         if not isinstance(getattr(env, "unwrapped", None), raw_env):
             raise TypeError(
                 "WarehouseWrapper wraps the warehouse_v1 env (warehouse_v1.env(...)), "
                 f"got {type(env).__name__}; use torchrl's PettingZooWrapper for other envs"
             )
+        self._training_seeds = training  # before super().__init__, which seeds
         with warnings.catch_warnings():
             # The wrapper warns on any PettingZoo but the one torchrl is tested with; the
             # range this package supports is covered by its interop tests.
@@ -83,9 +89,14 @@ class WarehouseWrapper(PettingZooWrapper):
                 group_map=MarlGroupMapType.ALL_IN_ONE_GROUP,
                 use_mask=True,
                 categorical_actions=True,
-                seed=seed,
+                seed=training_seed(seed) if training and seed is not None else seed,
                 device=device,
             )
+
+    def _set_seed(self, seed: int | None) -> None:
+        if self._training_seeds and seed is not None:
+            seed = training_seed(seed)
+        super()._set_seed(seed)
 
     @property
     def _raw(self) -> raw_env:

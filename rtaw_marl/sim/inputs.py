@@ -15,7 +15,26 @@ import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
 
-__all__ = ["seed_list", "seed_value", "slot_index"]
+__all__ = [
+    "RESERVED_SEEDS",
+    "SELECTION_SEEDS",
+    "TRAINING_SEED_END",
+    "draw_training_seed",
+    "seed_list",
+    "seed_value",
+    "slot_index",
+    "training_seed",
+]
+
+#: Episode seeds below this are reserved for results: evaluation (0-19, and the rest of
+#: 0-999 for larger studies) and checkpoint selection (1000-1999). No training episode
+#: ever uses one (:func:`training_seed`, :func:`draw_training_seed`).
+RESERVED_SEEDS = 2000
+#: The first checkpoint-selection seed (training's ``eval.seeds``); evaluation seeds
+#: (``rtaw-eval``, the tables) lie below it.
+SELECTION_SEEDS = 1000
+#: Training episode seeds lie in ``RESERVED_SEEDS .. TRAINING_SEED_END - 1``.
+TRAINING_SEED_END = 2**62
 
 
 def _integer(value: object) -> int | None:
@@ -123,3 +142,21 @@ def seed_list(seeds: object, name: str = "seeds") -> list[int]:
             f"{' ...' if len(repeated) > 5 else ''}; each seed is one episode, list it once"
         )
     return values
+
+
+def training_seed(seed: object, name: str = "seed") -> int:
+    """The training episode seed that a run's ``seed`` (any integer ``>= 0``) stands
+    for: ``RESERVED_SEEDS + seed`` (modulo the range), so ``seed=0`` is not evaluation
+    seed 0's episode, distinct seeds give distinct episodes, and the result is never a
+    reserved seed.
+
+    Raises:
+        ConfigError: ``seed`` is negative or not an integer.
+    """
+    span = TRAINING_SEED_END - RESERVED_SEEDS
+    return RESERVED_SEEDS + seed_value(seed, name) % span
+
+
+def draw_training_seed(rng: np.random.Generator) -> int:
+    """An unseeded episode's seed, drawn from ``rng`` outside the reserved seeds."""
+    return int(rng.integers(RESERVED_SEEDS, TRAINING_SEED_END))

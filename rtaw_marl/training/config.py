@@ -9,7 +9,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimGroups
-from rtaw_marl.sim.inputs import seed_list, seed_value
+from rtaw_marl.sim.inputs import SELECTION_SEEDS, seed_list, seed_value
 from rtaw_marl.training.logging import LOGGERS
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
@@ -150,8 +150,9 @@ class TrainEvalConfig:
 
     Attributes:
         every_frames: Evaluate against MPDM every this many frames.
-        seeds: Selection seeds (1000-1009), played in lockstep; kept apart from the
-            evaluation seeds 0-19, which are never used for training or selection.
+        seeds: Selection seeds (1000-1009), played in lockstep; at least 1000 (an error
+            otherwise): the evaluation seeds 0-19 are never used for training or
+            selection.
     """
 
     every_frames: int = 204_800
@@ -162,7 +163,13 @@ class TrainEvalConfig:
         at_least(self, "eval.", 1, "every_frames")
         if not self.seeds:
             raise ConfigError("eval.seeds must name at least one seed")
-        seed_list(self.seeds, "eval.seeds")
+        low = [s for s in seed_list(self.seeds, "eval.seeds") if s < SELECTION_SEEDS]
+        if low:
+            raise ConfigError(
+                f"eval.seeds {low[:5]} are below {SELECTION_SEEDS}: selection seeds start at "
+                f"{SELECTION_SEEDS}; seeds 0-{SELECTION_SEEDS - 1} are kept for evaluation, "
+                "which must not choose checkpoints"
+            )
 
 
 @dataclass(kw_only=True)

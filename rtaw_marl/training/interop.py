@@ -113,7 +113,7 @@ def make_interop_env(spec: SimSpec, seed: int) -> WarehouseWrapper:
         layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks,
         observation="full", obs_format="dict", **env_keys,
     )  # fmt: skip
-    return WarehouseWrapper(aec, seed=seed)
+    return WarehouseWrapper(aec, seed=seed, training=True)
 
 
 def acting_reward(data: TensorDictBase, keys: TrainKeys) -> float:

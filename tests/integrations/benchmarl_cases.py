@@ -55,6 +55,22 @@ def test_config_errors_are_caught() -> None:
         bm.load_task_config(num_robots="many")
 
 
+def test_training_episodes_are_never_evaluation_or_selection_episodes() -> None:
+    """BenchMARL seeds its envs with the experiment's seed (0 by default): the task maps
+    it, and every later episode, outside the reserved seeds 0-1999."""
+    from rtaw_marl.sim.inputs import RESERVED_SEEDS, training_seed
+
+    env = small_task().get_env_fun(num_envs=1, continuous_actions=False, seed=0, device="cpu")()
+    seeds = [env._raw.episode_seed]
+    env.set_seed(1000)
+    seeds.append(env._raw.episode_seed)
+    for _ in range(20):
+        env.rollout(TASKS + 1, policy=first_valid, break_when_any_done=False)
+        seeds.append(env._raw.episode_seed)
+    assert seeds[:2] == [training_seed(0), training_seed(1000)]
+    assert len(set(seeds)) == len(seeds) and min(seeds) >= RESERVED_SEEDS, seeds
+
+
 def test_specs_follow_the_env() -> None:
     task = small_task()
     env = task.get_env_fun(num_envs=1, continuous_actions=False, seed=0, device="cpu")()
