@@ -213,9 +213,7 @@ class WarehouseClass(TaskClass):
                 queue_len=config["queue_len"], episode_mode=config["episode_mode"],
                 **config["sim"],
             )  # fmt: skip
-            return WarehouseWrapper(
-                aec, return_state=True, seed=seed, device=device, training=True
-            )
+            return WarehouseWrapper(aec, return_state=True, seed=seed, device=device, training=True)
 
         return make
 

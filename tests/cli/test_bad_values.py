@@ -100,9 +100,12 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("train", ["seed=-1"], "seed must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[-1]"], "eval.seeds[0] must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[]"], "eval.seeds must name at least one seed"),
-    ("train", ["eval.seeds=[1000,3]"],
-     "eval.seeds [3] are below 1000: selection seeds start at 1000; seeds 0-999 are kept "
-     "for evaluation, which must not choose checkpoints"),
+    (
+        "train",
+        ["eval.seeds=[1000,3]"],
+        "eval.seeds [3] are below 1000: selection seeds start at 1000; seeds 0-999 are kept "
+        "for evaluation, which must not choose checkpoints",
+    ),
     ("render", ["seed=-1"], "seed must be an integer >= 0, got -1"),
     # Numbers that are not numbers, or not integers.
     ("eval", ["layout.width=nan"], "config key 'layout.width': Value 'nan'"),

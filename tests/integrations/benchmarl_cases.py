@@ -68,7 +68,8 @@ def test_training_episodes_are_never_evaluation_or_selection_episodes() -> None:
         env.rollout(TASKS + 1, policy=first_valid, break_when_any_done=False)
         seeds.append(env._raw.episode_seed)
     assert seeds[:2] == [training_seed(0), training_seed(1000)]
-    assert len(set(seeds)) == len(seeds) and min(seeds) >= RESERVED_SEEDS, seeds
+    assert len(set(seeds)) == len(seeds), seeds
+    assert min(seeds) >= RESERVED_SEEDS, seeds
 
 
 def test_specs_follow_the_env() -> None:

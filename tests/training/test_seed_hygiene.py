@@ -54,10 +54,12 @@ def assert_training_seeds(seeds: list[int], at_least: int) -> None:
 
 def test_training_seeds_avoid_the_reserved_range() -> None:
     mapped = [training_seed(s) for s in range(3 * RESERVED_SEEDS)]
-    assert min(mapped) == RESERVED_SEEDS and len(set(mapped)) == len(mapped)
+    assert min(mapped) == RESERVED_SEEDS
+    assert len(set(mapped)) == len(mapped)
     assert training_seed(TRAINING_SEED_END - RESERVED_SEEDS) == RESERVED_SEEDS
     drawn = [draw_training_seed(np.random.default_rng(s)) for s in range(2000)]
-    assert min(drawn) >= RESERVED_SEEDS and max(drawn) < TRAINING_SEED_END
+    assert min(drawn) >= RESERVED_SEEDS
+    assert max(drawn) < TRAINING_SEED_END
 
 
 def collect(cfg, batches: int = 3) -> None:
@@ -124,7 +126,8 @@ def test_unseeded_env_resets(episode_seeds: list[int]) -> None:
     single.reset(seed=1)
     for _ in range(50):
         single.reset()
-    assert episode_seeds[0] == 0 and episode_seeds[51] == 1
+    assert episode_seeds[0] == 0
+    assert episode_seeds[51] == 1
     assert_training_seeds(episode_seeds[1:51] + episode_seeds[52:], at_least=100)
     assert aec.unwrapped.episode_seed == episode_seeds[50]
 
