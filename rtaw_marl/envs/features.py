@@ -30,11 +30,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rtaw_marl.envs._rivals import first_rivals
+
 if TYPE_CHECKING:
     from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = [
+    "ALL_KEYS",
     "FEATURES",
+    "FLEET_FEATURES",
+    "FLEET_QUANTILES",
     "MISSING",
     "NUM_RIVALS",
     "OBSERVATION_KEYS",
@@ -47,6 +52,7 @@ __all__ = [
     "Decision",
     "decision_features",
     "feature_shapes",
+    "fleet_features",
     "relational_features",
     "robot_features",
     "sim_observation",
@@ -60,6 +66,13 @@ FEATURES = ("robots", "tasks", "agent", "relations", "rivals")
 OBSERVATION_KEYS = ("robots", "tasks", "agent", "action_mask")
 #: Keys of the relational features (``model=rtaw_plus``).
 RELATIONAL_KEYS = ("relations", "rivals")
+#: Every key :func:`decision_features` computes: :data:`FEATURES` and ``fleet``, the
+#: fixed-size fleet summary that RTAW+'s critic can read (``model.fleet_summary``).
+ALL_KEYS = (*FEATURES, "fleet")
+#: Quantiles of the fleet's times until free in ``fleet`` (then their mean).
+FLEET_QUANTILES = (0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0)
+#: Columns of ``fleet``: the quantiles, then the mean, of the robots' times until free.
+FLEET_FEATURES = (*(f"free_q{round(100 * q):02d}" for q in FLEET_QUANTILES), "free_mean")
 #: Columns of the robot features.
 ROBOT_FEATURES = ("x", "y", "time_until_free")
 #: Columns of the task features.
@@ -95,6 +108,7 @@ def feature_shapes(num_robots: int, queue_len: int) -> dict[str, tuple[int, ...]
         "agent": (len(ROBOT_FEATURES),),
         "relations": (n, len(RELATION_FEATURES)),
         "rivals": (n, NUM_RIVALS, len(RIVAL_FEATURES)),
+        "fleet": (len(FLEET_FEATURES),),
         "action_mask": (n,),
     }
 
@@ -158,7 +172,7 @@ def decision_features(
 
     Args:
         decision: The decision's arrays.
-        keys: Feature keys (:data:`FEATURES`); ``action_mask`` is always included.
+        keys: Feature keys (:data:`ALL_KEYS`); ``action_mask`` is always included.
         viewers: ``None``: the acting robot's view. ``int [V]`` (one simulator): the
             views of these robots, as each would see the decision if it were acting.
 
@@ -178,6 +192,9 @@ def decision_features(
             out["robots"] = rows
             actor = np.asarray(d.robot)[..., None, None]
             out["agent"] = np.take_along_axis(rows, actor, -2)[..., 0, :]
+    if "fleet" in keys:
+        fleet = fleet_features(d.free_at, d.time, d.scale)
+        out["fleet"] = fleet if viewers is None else np.broadcast_to(fleet, (len(viewers), 8))
     if "tasks" in keys:
         own = d.own_distances if viewers is None else d.distances[viewers]
         out["tasks"] = task_features(d.queue_rows, d.queue_length, own, d.queue_mask, d.scale)
@@ -213,6 +230,29 @@ def robot_features(
     out[..., :2] = robot_xy / scale
     remaining = free_at - np.asarray(time, dtype=np.float64)[..., None]
     out[..., 2] = np.maximum(remaining, 0.0) / scale
+    return out
+
+
+def fleet_features(free_at: np.ndarray, time: np.ndarray | float, scale: float) -> np.ndarray:
+    """The fleet in a fixed size: quantiles (:data:`FLEET_QUANTILES`, the nearest
+    robot's value at each) and the mean of the robots' times until free, ``/ L``.
+
+    Args:
+        free_at: ``float [..., M]`` free times.
+        time: ``float [...]`` current decision time(s).
+        scale: ``L``.
+
+    Returns:
+        ``float32 [..., 8]`` (:data:`FLEET_FEATURES`), whatever ``M``: an ``O(M)``
+        selection, no sort.
+    """
+    m = free_at.shape[-1]
+    remaining = np.maximum(free_at - np.asarray(time, dtype=np.float64)[..., None], 0.0)
+    kth = sorted({round(q * (m - 1)) for q in FLEET_QUANTILES})
+    picked = np.partition(remaining, kth, axis=-1)
+    out = np.empty((*free_at.shape[:-1], len(FLEET_FEATURES)), dtype=np.float32)
+    out[..., :-1] = picked[..., [round(q * (m - 1)) for q in FLEET_QUANTILES]] / scale
+    out[..., -1] = remaining.mean(axis=-1) / scale
     return out
 
 
@@ -279,10 +319,21 @@ def relational_features(
     dist = distances.reshape(p, m, n)
     rem = np.maximum(remaining, 0.0).reshape(p, m)
     who = np.broadcast_to(viewers, (*lead, v)).reshape(p, v)
-    arrival = np.swapaxes(dist + rem[:, :, None], -1, -2)  # [P, N, M]
-    pi, task = np.arange(p)[:, None, None], np.arange(n)[None, :, None]
-    own = np.swapaxes(arrival[pi, task, who[:, None, :]], -1, -2)  # [P, V, N]
+    pi = np.arange(p)[:, None, None]
     k = min(NUM_RIVALS, m - 1)
+    if v == 1:
+        # The acting robot alone (every env step): one compiled pass over the fleet.
+        actor = who[:, 0]
+        own = (dist[np.arange(p), actor] + rem[np.arange(p), actor, None])[:, None]  # [P, 1, N]
+        order, ranked = _actor_rivals(dist, rem, actor, k)
+    else:
+        arrival = np.swapaxes(dist + rem[:, :, None], -1, -2)  # [P, N, M]
+        task = np.arange(n)[None, :, None]
+        own = np.swapaxes(arrival[pi, task, who[:, None, :]], -1, -2)  # [P, V, N]
+        if k:
+            order = _rival_order(arrival, own, who, k)  # [P, V, N, k] robot ids
+            tk = np.arange(n)[None, None, :, None]
+            ranked = arrival[pi[..., None], tk, order] - own[..., None]  # [P, V, N, k]
 
     rel = np.zeros((p, v, n, len(RELATION_FEATURES)), dtype=np.float64)
     rel[..., 0] = own
@@ -292,9 +343,7 @@ def relational_features(
     rel[..., 7] = _nearest_other(chain, mask, MISSING * scale).reshape(p, 1, n)
     rivals = np.zeros((p, v, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float64)
     if k:
-        order = _rival_order(arrival, own, who, k)  # [P, V, N, k] robot ids
         pk, tk = pi[..., None], np.arange(n)[None, None, :, None]
-        ranked = arrival[pk, tk, order] - own[..., None]  # [P, V, N, k]
         top = min(k, 3)
         rel[..., 3 : 3 + top] = ranked[..., :top]
         rel[..., 6] = _softmin(ranked, SOFTMIN_TEMPERATURE * scale)
@@ -311,6 +360,22 @@ def relational_features(
         rel.astype(np.float32).reshape(*shape, len(RELATION_FEATURES)),
         rivals.astype(np.float32).reshape(*shape, NUM_RIVALS, len(RIVAL_FEATURES)),
     )
+
+
+def _actor_rivals(
+    dist: np.ndarray, rem: np.ndarray, actor: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The acting robot's ``k`` first rivals at each task (:func:`first_rivals`):
+    ``order int [P, 1, N, k]`` and ``arrival - own float64 [P, 1, N, k]``."""
+    p, _, n = dist.shape
+    order = np.zeros((p, n, max(k, 1)), dtype=np.int64)
+    delta = np.zeros((p, n, max(k, 1)), dtype=np.float64)
+    if k:
+        first_rivals(
+            np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(rem),
+            np.ascontiguousarray(actor, dtype=np.int64), k, order, delta,
+        )  # fmt: skip
+    return order[:, None, :, :k], delta[:, None, :, :k]
 
 
 def _rival_order(arrival: np.ndarray, own: np.ndarray, who: np.ndarray, k: int) -> np.ndarray:

@@ -36,6 +36,7 @@ hands them to ``_reset``, and none is known here: seeds come from ``set_seed`` a
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -45,8 +46,10 @@ from torchrl.data import Binary, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from rtaw_marl.envs.features import (
+    ALL_KEYS,
     FEATURES,
     OBSERVATION_KEYS,
+    RELATIONAL_KEYS,
     Decision,
     decision_features,
     feature_shapes,
@@ -67,14 +70,30 @@ class BatchedWarehouseEnv(EnvBase):
             distance model and task stream are built once and shared by all simulators.
         num_envs: ``B``.
         seed: Base seed of the episode seeds.
+        keys: The observation entries to compute and return (``action_mask`` always):
+            any of :data:`~rtaw_marl.envs.features.ALL_KEYS`, by default the five of
+            :data:`~rtaw_marl.envs.features.FEATURES`. A trainer asks for what its
+            networks read: RTAW+ with ``model.fleet_summary`` needs no ``[B, M, ...]``
+            entry, so neither the env's cost nor a batch's size grows with ``M``.
+
+    Raises:
+        ConfigError: ``num_envs < 1``, or an unknown key (the message lists them).
     """
 
-    def __init__(self, spec: SimSpec, num_envs: int, seed: int = 0) -> None:
+    def __init__(
+        self, spec: SimSpec, num_envs: int, seed: int = 0, keys: Iterable[str] = FEATURES
+    ) -> None:
         if int(num_envs) < 1:
             raise ConfigError(f"num_envs must be >= 1, got {num_envs}")
+        self.keys = tuple(k for k in dict.fromkeys(keys) if k != "action_mask")
+        if unknown := [k for k in self.keys if k not in ALL_KEYS]:
+            raise ConfigError(f"unknown observation key(s) {unknown}; valid: {', '.join(ALL_KEYS)}")
         super().__init__(batch_size=torch.Size([num_envs]), device="cpu")
         # Live from the first reset to close(); one flag read per batched step.
         self._live, self._closed = False, False
+        # Only the distances the keys need are gathered (the fleet's is [M, N]).
+        self._own = "tasks" in self.keys
+        self._relational = bool(set(RELATIONAL_KEYS) & set(self.keys))
         factory = SimFactory(spec)
         b, m, n = int(num_envs), spec.env.num_robots, spec.env.queue_len
         self.num_envs, self.num_robots, self.queue_len = b, m, n
@@ -109,7 +128,7 @@ class BatchedWarehouseEnv(EnvBase):
     def _make_specs(self, b: int, m: int, n: int) -> None:
         shapes = feature_shapes(m, n)
         self.observation_spec = Composite(
-            {key: Unbounded(shape=(b, *shapes[key]), dtype=torch.float32) for key in FEATURES},
+            {key: Unbounded(shape=(b, *shapes[key]), dtype=torch.float32) for key in self.keys},
             action_mask=Binary(n=n, shape=(b, n), dtype=torch.bool),
             shape=(b,),
         )
@@ -228,10 +247,12 @@ class BatchedWarehouseEnv(EnvBase):
         sim = self.sims[i]
         self._time[i] = sim.time
         self._robot[i] = sim.robot
-        self._dist[i] = sim.robot_distances()
-        self._all_dist[i] = sim.distance_matrix()
-        self._chain[i] = sim.chain_distances()
-        self._wait[i] = sim.queue_waits()
+        if self._own:
+            self._dist[i] = sim.robot_distances()
+        if self._relational:
+            self._all_dist[i] = sim.distance_matrix()
+            self._chain[i] = sim.chain_distances()
+            self._wait[i] = sim.queue_waits()
 
     def _observation(self) -> TensorDict:
         decision = Decision(
@@ -239,12 +260,12 @@ class BatchedWarehouseEnv(EnvBase):
             self._mask, self.scale, own_distances=self._dist, distances=self._all_dist,
             waits=self._wait, chain=self._chain,
         )  # fmt: skip
-        features = decision_features(decision, FEATURES)
+        features = decision_features(decision, self.keys)
         mask = torch.from_numpy(features["action_mask"])
         # A masked action spec makes random policies (and check_env_specs) pick valid slots.
         self._action_spec_unbatched.update_mask(mask)
         return TensorDict(
-            {key: torch.from_numpy(features[key]) for key in (*FEATURES, "action_mask")},
+            {key: torch.from_numpy(features[key]) for key in (*self.keys, "action_mask")},
             batch_size=self.batch_size,
         )
 

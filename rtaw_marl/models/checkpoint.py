@@ -320,7 +320,13 @@ def build_networks(model: ModelConfig | Mapping[str, Any]) -> tuple[Actor, Criti
     if isinstance(model, RTAWPlusConfig):
         return (
             RTAWPlusActor(model.embed_dim, model.heads),
-            RTAWPlusCritic(model.embed_dim, model.heads, model.critic_hidden, model.critic_fleet),
+            RTAWPlusCritic(
+                model.embed_dim,
+                model.heads,
+                model.critic_hidden,
+                model.critic_fleet,
+                summary=model.fleet_summary,
+            ),
         )
     robot_in, task_in = len(ROBOT_FEATURES), len(TASK_FEATURES)
     actor = RTAWActor(robot_in, task_in, model.embed_dim, model.head_dim)

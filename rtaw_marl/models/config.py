@@ -48,6 +48,12 @@ class RTAWPlusConfig:
         critic_fleet: The critic (used only in training) also sees the whole fleet: the
             robots' features, embedded and mean-pooled. ``False`` keeps the critic to
             the acting robot's relational view, as the actor (an ablation).
+        fleet_summary: With ``critic_fleet``, the critic reads the fleet as a fixed-size
+            summary (``fleet [8]``: quantiles and mean of the robots' times until
+            free, :func:`~rtaw_marl.envs.features.fleet_features`) instead of every
+            robot's row (``robots [M, 3]``): neither the update's cost nor a batch's
+            size then grows with ``M``, and simulators with different fleets can share
+            a batch (``mix``). ``False`` is the shipped per-row policies' critic.
     """
 
     name: str = "rtaw_plus"
@@ -55,6 +61,7 @@ class RTAWPlusConfig:
     heads: int = 4
     critic_hidden: int = 64
     critic_fleet: bool = True
+    fleet_summary: bool = False
 
     def __post_init__(self) -> None:
         from rtaw_marl.errors import ConfigError
@@ -62,9 +69,13 @@ class RTAWPlusConfig:
         if self.name != "rtaw_plus":
             raise ConfigError(f"model.name must be 'rtaw_plus' for these keys, got {self.name!r}")
         _check_sizes(self, ("embed_dim", "heads", "critic_hidden"))
-        if not isinstance(self.critic_fleet, bool):
+        for key in ("critic_fleet", "fleet_summary"):
+            if not isinstance(getattr(self, key), bool):
+                raise ConfigError(f"model.{key} must be true or false, got {getattr(self, key)!r}")
+        if self.fleet_summary and not self.critic_fleet:
             raise ConfigError(
-                f"model.critic_fleet must be true or false, got {self.critic_fleet!r}"
+                "model.fleet_summary=true summarises the fleet the critic sees, but "
+                "model.critic_fleet=false shows it none: set one of them"
             )
         for width in (self.embed_dim, RIVAL_DIM):
             if width % self.heads:

@@ -22,7 +22,8 @@ no layer size depends on ``M`` or ``N``.
 The critic has its own encoder of the same form without the rival attention (the
 ``N * K`` rival tokens are most of the cost, and the relations already summarise the
 rivals) and, since it is only used in training, sees the whole fleet instead: the
-robots' paper features ``[*, M, 3]`` are embedded and mean-pooled; the masked mean of
+robots' paper features ``[*, M, 3]`` are embedded and mean-pooled (or, with
+``model.fleet_summary``, the fixed-size ``fleet [*, 8]`` is embedded); the masked mean of
 the task tokens and the fleet summary go through Linear(2E, hidden) -> Tanh ->
 Linear(hidden, 1).
 """
@@ -32,7 +33,12 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from rtaw_marl.envs.features import RELATION_FEATURES, RIVAL_FEATURES, ROBOT_FEATURES
+from rtaw_marl.envs.features import (
+    FLEET_FEATURES,
+    RELATION_FEATURES,
+    RIVAL_FEATURES,
+    ROBOT_FEATURES,
+)
 from rtaw_marl.models.config import RIVAL_DIM
 
 __all__ = ["RTAWPlusActor", "RTAWPlusCritic", "RTAWPlusEncoder"]
@@ -189,26 +195,36 @@ class RTAWPlusCritic(nn.Module):
         hidden_dim: Hidden size of the value head.
         fleet: Also see the whole fleet (``robots``); ``False``: the tasks' relational
             view only, and ``in_keys`` drops ``robots``.
+        summary: See the fleet as its fixed-size summary ``fleet [*, 8]``
+            (``in_keys`` has ``fleet`` instead of ``robots``), embedded as one token.
     """
 
     in_keys: tuple[str, ...] = ("relations", "robots", "action_mask")
 
-    def __init__(self, embed_dim: int, heads: int, hidden_dim: int, fleet: bool = True) -> None:
+    def __init__(
+        self, embed_dim: int, heads: int, hidden_dim: int, fleet: bool = True,
+        *, summary: bool = False,
+    ) -> None:  # fmt: skip
         super().__init__()
         self.encoder = RTAWPlusEncoder(embed_dim, heads, rivals=False)
-        self.fleet_embed = _mlp(len(ROBOT_FEATURES), embed_dim, embed_dim) if fleet else None
+        self.summary = fleet and summary
+        width_in = len(FLEET_FEATURES) if self.summary else len(ROBOT_FEATURES)
+        self.fleet_embed = _mlp(width_in, embed_dim, embed_dim) if fleet else None
         if not fleet:
             self.in_keys = ("relations", "action_mask")
+        elif self.summary:
+            self.in_keys = ("relations", "fleet", "action_mask")
         width = (2 if fleet else 1) * embed_dim
         self.head = nn.Sequential(nn.Linear(width, hidden_dim), nn.Tanh(), nn.Linear(hidden_dim, 1))
 
     def forward(self, relations: torch.Tensor, *rest: torch.Tensor) -> torch.Tensor:
-        """Value ``[*, 1]`` from ``relations``, ``robots`` ``[*, M, 3]`` (with the fleet)
-        and ``action_mask``, in ``in_keys`` order."""
-        *robots, action_mask = rest
+        """Value ``[*, 1]`` from ``relations``, the fleet (``robots [*, M, 3]`` or
+        ``fleet [*, 8]``, if it sees one) and ``action_mask``, in ``in_keys`` order."""
+        *fleet, action_mask = rest
         tasks = self.encoder(relations, None, action_mask)
         weight = action_mask.unsqueeze(-1).to(tasks.dtype)
         parts = [(tasks * weight).sum(-2) / weight.sum(-2).clamp_min(1.0)]
         if self.fleet_embed is not None:
-            parts.append(self.fleet_embed(robots[0]).mean(-2))
+            embedded = self.fleet_embed(fleet[0])
+            parts.append(embedded if self.summary else embedded.mean(-2))
         return self.head(torch.cat(parts, dim=-1))

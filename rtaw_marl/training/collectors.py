@@ -24,7 +24,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from functools import partial
 from typing import Any
@@ -35,8 +35,11 @@ from tensordict import TensorDictBase
 from tensordict.nn import TensorDictModule
 from torchrl.collectors import BaseCollector, Collector, MultiSyncCollector
 
+from rtaw_marl.envs.features import FEATURES
+from rtaw_marl.envs.mixed import MixedBatchedEnv
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.scenarios.mix import mix_specs
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.checkpoints import Progress
 from rtaw_marl.training.config import RayConfig, TrainConfig
@@ -108,10 +111,12 @@ def build_collector(
     actor: TensorDictModule,
     device: torch.device,
     progress: Progress,
+    keys: Iterable[str] = FEATURES,
 ) -> Collection:
     """The collectors of ``cfg.collector`` for the run at ``progress``.
 
-    Env seeds depend on the resume point, so that a resumed run sees new episodes.
+    Env seeds depend on the resume point, so that a resumed run sees new episodes. The
+    batched envs compute the observation entries ``keys`` only (what the networks read).
 
     Raises:
         ConfigError: Ray is not installed, or its cluster cannot be reached or lacks the
@@ -124,9 +129,11 @@ def build_collector(
         make_env = [partial(make_interop_env, spec, seed) for seed in seeds]
     else:
         threads = 1 if col.workers > 1 or col.backend == "ray" else None
-        make_env = [
-            partial(_worker_env, spec, col.envs_per_worker, seed, threads) for seed in seeds
-        ]
+        members = [(spec, col.envs_per_worker)]
+        if cfg.mix:
+            share = col.envs_per_worker // len(cfg.mix)
+            members = [(member, share) for member in mix_specs(cfg.mix)]
+        make_env = [partial(_worker_env, members, seed, threads, tuple(keys)) for seed in seeds]
     batch = cfg.algo.frames_per_batch
     remaining = max(cfg.frames - progress.frames, batch)
     kwargs = {"frames_per_batch": batch, "total_frames": -(-remaining // batch) * batch}
@@ -145,10 +152,16 @@ def build_collector(
     return Collection(collector, policy, actor, device, cluster)
 
 
-def _worker_env(spec: SimSpec, envs: int, seed: int, threads: int | None) -> BatchedWarehouseEnv:
-    """The batched env of one collector. A worker process or actor runs its policy on
-    ``threads`` threads (torch's default, one per core, oversubscribes the cores the
-    workers share).
+def _worker_env(
+    members: list[tuple[SimSpec, int]],
+    seed: int,
+    threads: int | None,
+    keys: tuple[str, ...] = FEATURES,
+) -> BatchedWarehouseEnv | MixedBatchedEnv:
+    """The batched env of one collector: ``count`` simulators of each ``(spec, count)``
+    member (one member: a :class:`BatchedWarehouseEnv`; a mix: a
+    :class:`MixedBatchedEnv`). A worker process or actor runs its policy on ``threads``
+    threads (torch's default, one per core, oversubscribes the cores the workers share).
 
     Worker processes ignore Ctrl-C and SIGTERM: the terminal and schedulers signal the
     whole process group, and the main process alone must handle them (save, then shut
@@ -159,7 +172,9 @@ def _worker_env(spec: SimSpec, envs: int, seed: int, threads: int | None) -> Bat
         if threading.current_thread() is threading.main_thread():
             for signum in STOP_SIGNALS:
                 signal.signal(signum, signal.SIG_IGN)
-    return BatchedWarehouseEnv(spec, envs, seed)
+    if len(members) == 1:
+        return BatchedWarehouseEnv(*members[0], seed, keys)
+    return MixedBatchedEnv(members, seed, keys)
 
 
 # --------------------------------------------------------------------------- ray

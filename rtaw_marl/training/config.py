@@ -238,6 +238,12 @@ class TrainConfig(SimGroups):
         output_dir: The run folder; ``None`` means the Hydra run folder.
         progress: Show a tqdm progress bar.
         interop: Train through TorchRL's PettingZooWrapper on the AEC env (small M).
+        mix: Train on several scenarios at once (a generalist): member scenarios, each
+            ``NAME`` or ``NAME:key=value,...`` (:mod:`rtaw_marl.scenarios.mix`); every
+            collector's batch holds ``collector.envs_per_worker / len(mix)`` simulators
+            of each. Empty: the run's own scenario alone. The run's scenario still
+            picks the checkpoints (``eval.*``). Needs ``model=rtaw_plus`` with
+            ``model.fleet_summary=true`` (or ``model.critic_fleet=false``).
     """
 
     model: Any
@@ -255,9 +261,11 @@ class TrainConfig(SimGroups):
     output_dir: str | None = None
     progress: bool = True
     interop: bool = False
+    mix: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         check_fields(self)
+        self._check_mix()
         seed_value(self.seed, "seed")
         at_least(self, "", 1, "frames", "torch_threads")
         if self.device not in DEVICES:
@@ -265,6 +273,30 @@ class TrainConfig(SimGroups):
         if self.logger not in LOGGERS:
             raise ConfigError(f"logger must be one of {', '.join(LOGGERS)}, got {self.logger!r}")
         self._check_budgets()
+
+    def _check_mix(self) -> None:
+        if not self.mix:
+            return
+        from rtaw_marl.scenarios.mix import mix_specs
+
+        mix_specs(self.mix)  # names, keys and values
+        model = self.model
+        fleet = getattr(model, "critic_fleet", None)
+        if getattr(model, "name", None) != "rtaw_plus" or (
+            fleet and not getattr(model, "fleet_summary", False)
+        ):
+            raise ConfigError(
+                "mix= stacks simulators with different fleets, so the networks must not "
+                "read the whole fleet: use model=rtaw_plus with model.fleet_summary=true "
+                "(or model.critic_fleet=false)"
+            )
+        if self.interop:
+            raise ConfigError("mix= runs batched envs: set interop=false")
+        if self.collector.envs_per_worker % len(self.mix):
+            raise ConfigError(
+                f"collector.envs_per_worker={self.collector.envs_per_worker} must be a "
+                f"multiple of the {len(self.mix)} mix members (each gets the same share)"
+            )
 
     def _check_budgets(self) -> None:
         """Budgets are spent in whole units, never rounded: ``frames`` in batches of

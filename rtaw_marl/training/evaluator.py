@@ -3,9 +3,12 @@ the selection seeds (never the evaluation seeds 0-19), all episodes in lockstep.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 import torch
 
+from rtaw_marl.envs.features import FEATURES
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.models.actor_critic import greedy_action
@@ -24,13 +27,18 @@ class Evaluator:
         spec: The simulator spec.
         seeds: Selection seeds (never the evaluation seeds 0-19).
         history: Evaluations of the run so far (on resume).
+        keys: The observation entries the evaluated network reads (its ``in_keys``).
     """
 
     def __init__(
-        self, spec: SimSpec, seeds: list[int], history: list[dict[str, float]] | None = None
+        self,
+        spec: SimSpec,
+        seeds: list[int],
+        history: list[dict[str, float]] | None = None,
+        keys: Iterable[str] = FEATURES,
     ) -> None:
         self.seeds = seeds
-        self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0)
+        self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0, keys=keys)
         rules = {"mpdm": MPDM(), "lookahead": make_baseline("lookahead")}
         ttd = {name: r["ttd"] for name, r in evaluate(build_sim(spec), rules, seeds).items()}
         self.mpdm_ttd = float(np.mean(ttd["mpdm"]))

@@ -15,12 +15,14 @@ average given what the observation shows.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 from tensordict import TensorDict
 
+from rtaw_marl.envs.mixed import MixedBatchedEnv
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.models.actor_critic import greedy_action
 from rtaw_marl.models.checkpoint import Actor, Critic
@@ -52,6 +54,7 @@ def imitate(
     seed: int,
     gamma: float,
     reward_scale: float,
+    mix: Sequence[SimSpec] = (),
 ) -> list[dict[str, float]]:
     """Warm-start ``actor`` (and ``critic``) in place; one row of figures per round.
 
@@ -64,6 +67,8 @@ def imitate(
         seed: Seed of the episodes (kept apart from PPO's and the evaluation's).
         gamma: PPO's discount, for the critic's targets.
         reward_scale: PPO's reward scale, for the critic's targets.
+        mix: A mix's member specs (``num_envs / len(mix)`` simulators of each) instead
+            of ``spec`` alone.
 
     Returns:
         Per round: ``round``, ``decisions`` labelled so far, ``agreement`` (how often the
@@ -72,9 +77,13 @@ def imitate(
     """
     teacher = make_baseline(cfg.teacher, params=BaselinesConfig())
     teacher.reset(seed)  # its ties are broken by the run's seed, as everything else
-    env = BatchedWarehouseEnv(spec, num_envs, seed=seed)
-    steps = max(1, cfg.frames // (cfg.rounds * num_envs))
     keys = tuple(dict.fromkeys((*actor.in_keys, *critic.in_keys)))
+    if mix:
+        share = num_envs // len(mix)
+        env = MixedBatchedEnv([(member, share) for member in mix], seed=seed, keys=keys)
+    else:
+        env = BatchedWarehouseEnv(spec, num_envs, seed=seed, keys=keys)
+    steps = max(1, cfg.frames // (cfg.rounds * num_envs))
     optim = torch.optim.Adam([*actor.parameters(), *critic.parameters()], lr=cfg.lr)
     rounds: list[_Round] = []
     rows = []
@@ -114,8 +123,8 @@ def _collect(
         frames.append(step.set("next", out["next"].select("reward", "done")))
         labels.append(label)
         td = out["next"]
-        if bool(td["done"].any()):
-            td = env.reset()
+        if bool(td["done"].any()):  # the finished simulators only (a mix's differ)
+            td = env.reset(td.select("done").set("_reset", td["done"].clone()))
     labels = torch.stack(labels)
     data = _Round(torch.stack(frames), labels, torch.full(labels.shape, torch.nan))
     return data, float(np.mean(agree)) if agree else float("nan")

@@ -26,6 +26,7 @@ from tqdm import tqdm
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.checkpoint import Actor, Critic, build_networks
+from rtaw_marl.scenarios.mix import mix_specs
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.checkpoints import (
     Checkpoints,
@@ -199,13 +200,16 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     if cfg.resume:
         progress, history = resume(cfg, nets, learner.optim, run_dir)
         trim_csv_logs(run_dir / "logs", progress.frames)
-    evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history)
-    reward_scale = cfg.algo.reward_scale or 1.0 / evaluator.env.scale
+    evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history, nets[0].in_keys)
+    # A mix's rewards come in units of each member's L already.
+    reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
     logger = RunLogger(run_dir, cfg.logger)
     if cfg.imitation.teacher is not None and progress.frames == 0:
         _warm_start(cfg, spec, learner, logger, reward_scale)
     # Local worker processes or Ray actors; they act on CPUs, the learner on `device`.
-    collector = build_collector(cfg, spec, learner.loss.actor_network, device, progress)
+    collector = build_collector(
+        cfg, spec, learner.loss.actor_network, device, progress, observed(nets)
+    )
     buffer = TensorDictReplayBuffer(
         storage=LazyTensorStorage(cfg.algo.frames_per_batch, device=device),
         sampler=SamplerWithoutReplacement(),
@@ -295,7 +299,7 @@ def _warm_start(
     rows = imitate(
         cfg.imitation, spec, actor, critic,
         num_envs=cfg.collector.envs_per_worker, seed=cfg.seed * 7919 + 104_729,
-        gamma=cfg.algo.gamma, reward_scale=reward_scale,
+        gamma=cfg.algo.gamma, reward_scale=reward_scale, mix=mix_specs(cfg.mix),
     )  # fmt: skip
     if actor is not learner.actor_net:  # a GPU learner: bring the warm start over
         learner.actor_net.load_state_dict(actor.state_dict())
@@ -323,6 +327,11 @@ def _check(cfg: TrainConfig) -> None:
         raise ConfigError("interop=true runs one PettingZooWrapper env: set collector.workers=1")
     if cfg.interop and cfg.collector.backend != "local":
         raise ConfigError("interop=true runs in this process: set collector.backend=local")
+    if cfg.interop and getattr(cfg.model, "fleet_summary", False):
+        raise ConfigError(
+            "interop=true trains on the AEC env's observation, which has no fleet summary: "
+            "set model.fleet_summary=false"
+        )
 
 
 def build_learner(cfg: TrainConfig, keys: TrainKeys, device: torch.device | None = None) -> Learner:
@@ -363,6 +372,12 @@ def build_learner(cfg: TrainConfig, keys: TrainKeys, device: torch.device | None
     gae.set_keys(**shared_keys)
     optim = torch.optim.Adam(loss.parameters(), lr=algo.lr)
     return Learner(actor_net, critic_net, loss, gae, optim)
+
+
+def observed(nets: tuple[torch.nn.Module, ...]) -> tuple[str, ...]:
+    """The observation entries the networks read, in order (the batched envs compute
+    only these)."""
+    return tuple(dict.fromkeys(key for net in nets for key in net.in_keys))
 
 
 def _on_cpu(net: torch.nn.Module) -> torch.nn.Module:

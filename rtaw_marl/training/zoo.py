@@ -37,6 +37,7 @@ from typing import Any
 
 from rtaw_marl.errors import unknown_name
 from rtaw_marl.scenarios import SCENARIOS, TABLE1_ROBOTS, Scenario
+from rtaw_marl.scenarios.mix import GENERALIST
 
 __all__ = [
     "BUDGET",
@@ -69,6 +70,17 @@ CURRICULUM_SEEDS = (1000, 1001, 1002, 1003, 1004)
 UNSPELLED = frozenset({"tasks=designated"})
 #: Table II's 100-robot scenarios: their policies and the bases of its curricula.
 TABLE2_BASES = ("open300_direct_m100_random", "C256_astar_m100_random")
+#: The generalist's PPO frames (360 batches of 8192).
+GENERALIST_FRAMES = 2_949_120
+#: The generalist's keys besides its mix: a fleet summary for the critic (a mix's fleets
+#: differ), two collector processes with two simulators of each of its 16 members, and two learner
+#: threads (RTAW+'s update is twice as fast on both cores; the collectors wait for it).
+GENERALIST_KEYS = (
+    "model.fleet_summary=true",
+    "collector.workers=2",
+    "collector.envs_per_worker=32",
+    "torch_threads=2",
+)
 #: The kinds of entries.
 STAGES = ("train", "continued", "curriculum")
 
@@ -88,6 +100,8 @@ class Recipe:
         base: The entry whose run it continues (staged entries).
         base_frames: A curriculum's base: its best checkpoint's PPO frames.
         seed: The training seed.
+        mix: A generalist's training mix (:mod:`rtaw_marl.scenarios.mix`); its
+            :attr:`scenario` then only selects the checkpoints.
     """
 
     name: str
@@ -99,6 +113,7 @@ class Recipe:
     base: str | None = None
     base_frames: int = 0
     seed: int = 0
+    mix: tuple[str, ...] = ()
 
     def setting(self) -> Scenario:
         """The scenario it trains on (with :attr:`env`'s changes)."""
@@ -119,9 +134,11 @@ class Recipe:
         ``<runs>/<base>/checkpoints/best.pt``."""
         if self.stage == "curriculum":
             return self.continuing(f"{runs / str(self.base)}/checkpoints/best.pt", self.base_frames)
+        mixed = (*GENERALIST_KEYS, f"mix=[{','.join(self.mix)}]") if self.mix else ()
         return [
             *self.scenario_overrides(), f"model={self.model}", "algo=ppo", *WARM_START,
             f"frames={self.budget}", f"eval.every_frames={EVERY_FRAMES}", f"seed={self.seed}",
+            *mixed,
         ]  # fmt: skip
 
     def continuing(self, checkpoint: str, start_frames: int) -> list[str]:
@@ -167,6 +184,12 @@ def _recipes() -> list[Recipe]:
                     stage="continued", base=f"{name}{plus}",
                 )
             )  # fmt: skip
+    out.append(
+        Recipe(
+            name="generalist_plus", scenario="C_astar_m100", model="rtaw_plus",
+            frames=GENERALIST_FRAMES, mix=GENERALIST,
+        )
+    )  # fmt: skip
     return out
 
 

@@ -33,6 +33,7 @@ PRETRAINED: tuple[str, ...] = (
     "open300_direct_m500_random_plus",
     "C256_astar_m500_random_plus",
     *(f"{n}_long{plus}" for n in _TABLE1 for plus in ("", "_plus")),
+    "generalist_plus",
 )
 
 

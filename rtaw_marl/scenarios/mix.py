@@ -1,0 +1,84 @@
+"""Scenario mixes: the settings one generalist policy trains on at once (``mix=``).
+
+A member is a registered scenario name, optionally with simulator keys changed, each
+after a colon: ``m<M>`` robots, ``n<N>`` queue slots, ``t<T>`` tasks per episode,
+``paper`` or ``drain`` episodes. ``C_astar_m10:m30:n5:paper`` is layout C with 30 robots,
+a queue of 5 and ``paper`` episodes; the syntax needs no quoting on Hydra's command line
+(``mix=[C_astar_m10,C_astar_m10:m30:n5]``). Each member gets its own simulators in
+every collector's batch (:class:`~rtaw_marl.envs.mixed.MixedBatchedEnv`), so one batch
+holds many fleets, queues and maps.
+
+:data:`GENERALIST` is the shipped generalist's mix: every Table I layout (open grid and
+layouts A-E, 60x60) at robot counts from 5 to 200, a 256x256 warehouse and a 300x300
+open grid at 500 and 1,000 robots, queues of 5 to 20, both episode modes. It leaves out
+what the generalist is evaluated on as unseen: robot counts 30, 150, 2,000 and above,
+the MovingAI maps and LoRR's ``warehouse_large``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.scenarios.registry import scenario
+from rtaw_marl.sim.builder import SimSpec
+
+__all__ = ["GENERALIST", "MEMBER_KEYS", "member_spec", "mix_specs"]
+
+#: A member's key prefixes and the simulator key each sets (plus ``paper``/``drain``).
+MEMBER_KEYS = {"m": "num_robots", "n": "queue_len", "t": "num_tasks"}
+
+#: The shipped generalist's training mix (module docstring).
+GENERALIST: tuple[str, ...] = (
+    "open60_direct_m10:m5",
+    "A_astar_m10",
+    "B_astar_m10:m20:n5",
+    "C_astar_m10:paper",
+    "D_astar_m10:m50",
+    "E_astar_m100:n20",
+    "open60_direct_m100:paper",
+    "A_astar_m100:m200:paper",
+    "C_astar_m100",
+    "B_astar_m10:m15:paper",
+    "D_astar_m100:m70:n5",
+    "E_astar_m10:m8",
+    "C256_astar_m500_random",
+    "open300_direct_m1000_random",
+    "open300_direct_m500_random:t2500",
+    "C256_astar_m1000_random:t2500",
+)
+
+
+def member_spec(member: str) -> SimSpec:
+    """The simulator spec of one mix member (module docstring for the syntax).
+
+    Raises:
+        ConfigError: An unknown scenario (the message lists them), key or value.
+    """
+    name, *keys = str(member).split(":")
+    base = scenario(name.strip())
+    env: dict[str, object] = {}
+    for key in keys:
+        if key in ("paper", "drain"):
+            env["episode_mode"] = key
+        elif key[:1] in MEMBER_KEYS and key[1:].isdigit():
+            env[MEMBER_KEYS[key[0]]] = int(key[1:])
+        else:
+            raise ConfigError(
+                f"mix member {member!r}: {key!r} is not m<robots>, n<queue slots>, "
+                "t<tasks>, paper or drain"
+            )
+    return base.with_env(**env).spec()
+
+
+def mix_specs(members: Sequence[str]) -> list[SimSpec]:
+    """The specs of a mix's members, in order.
+
+    Raises:
+        ConfigError: A member is given twice, or is invalid (:func:`member_spec`).
+    """
+    members = list(members)
+    if len(set(members)) < len(members):
+        twice = sorted({m for m in members if members.count(m) > 1})
+        raise ConfigError(f"mix lists {twice} more than once; list each member once")
+    return [member_spec(m) for m in members]
