@@ -124,7 +124,8 @@ def _collect(
         labels.append(label)
         td = out["next"]
         if bool(td["done"].any()):  # the finished simulators only (a mix's differ)
-            td = env.reset(td.select("done").set("_reset", td["done"].clone()))
+            # TorchRL keeps the other rows from the tensordict given: hand it all of them.
+            td = env.reset(td.clone().set("_reset", td["done"].clone()))
     labels = torch.stack(labels)
     data = _Round(torch.stack(frames), labels, torch.full(labels.shape, torch.nan))
     return data, float(np.mean(agree)) if agree else float("nan")
