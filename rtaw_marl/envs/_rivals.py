@@ -58,3 +58,77 @@ def first_rivals(
                 order[p, t, i] = r
                 if f < k:
                     filled[t] = f + 1
+
+
+@njit(cache=True, nogil=True)
+def actor_relations(
+    dist: np.ndarray,
+    rem: np.ndarray,
+    who: np.ndarray,
+    lengths: np.ndarray,
+    waits: np.ndarray,
+    chain: np.ndarray,
+    mask: np.ndarray,
+    scale: float,
+    k: int,
+    missing: float,
+    temperature: float,
+    rel: np.ndarray,
+    rivals: np.ndarray,
+) -> None:
+    """The acting robot's whole relational view, fused (no ``[P, N, M]`` temporaries).
+
+    The compiled twin of the NumPy expressions of
+    :func:`rtaw_marl.envs.features.relational_features` for one view: rivals by
+    :func:`first_rivals`, then each task's 8 relations and ``K`` rival tokens.
+
+    Args:
+        dist: ``float64 [P, M, N]``; rem: ``float64 [P, M]`` (clipped at 0); who:
+            ``int64 [P]``; lengths, waits: ``float64 [P, N]``; chain: ``float64
+            [P, N, N]``; mask: ``bool [P, N]``.
+        scale: ``L``. k: rivals kept (``min(K, M - 1)``). missing: the value of a missing
+            rival or chain, in cells (``MISSING * L``). temperature: the soft-min's, in
+            cells.
+        rel: ``float32 [P, N, 8]``, overwritten. rivals: ``float32 [P, N, K, 4]``,
+            overwritten (rows past ``k`` and of empty slots zero).
+    """
+    p_count, n = dist.shape[0], dist.shape[2]
+    order = np.zeros((p_count, n, max(k, 1)), np.int64)
+    delta = np.zeros((p_count, n, max(k, 1)))
+    if k:
+        first_rivals(dist, rem, who, k, order, delta)
+    rel[:] = 0.0
+    rivals[:] = 0.0
+    for p in range(p_count):
+        actor = who[p]
+        for t in range(n):
+            if not mask[p, t]:
+                continue
+            nearest = np.inf
+            for j in range(n):
+                if j != t and mask[p, j] and chain[p, t, j] < nearest:
+                    nearest = chain[p, t, j]
+            row = np.empty(8)
+            row[0] = dist[p, actor, t] + rem[p, actor]
+            row[1] = lengths[p, t]
+            row[2] = waits[p, t]
+            row[3] = missing
+            row[4] = missing
+            row[5] = missing
+            row[6] = missing
+            row[7] = nearest if nearest < np.inf else missing
+            if k:
+                low = delta[p, t, 0]
+                total = 0.0
+                for i in range(k):
+                    total += np.exp(-(delta[p, t, i] - low) / temperature)
+                    if i < 3:
+                        row[3 + i] = delta[p, t, i]
+                    r = order[p, t, i]
+                    rivals[p, t, i, 0] = delta[p, t, i] / scale
+                    rivals[p, t, i, 1] = rem[p, r] / scale
+                    rivals[p, t, i, 2] = dist[p, r, t] / scale
+                    rivals[p, t, i, 3] = 1.0
+                row[6] = low - temperature * np.log(total)
+            for c in range(8):
+                rel[p, t, c] = row[c] / scale

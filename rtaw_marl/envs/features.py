@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rtaw_marl.envs._rivals import first_rivals
+from rtaw_marl.envs._rivals import actor_relations, first_rivals
 
 if TYPE_CHECKING:
     from rtaw_marl.sim.core import WarehouseSim
@@ -321,19 +321,31 @@ def relational_features(
     who = np.broadcast_to(viewers, (*lead, v)).reshape(p, v)
     pi = np.arange(p)[:, None, None]
     k = min(NUM_RIVALS, m - 1)
+    shape = (*lead, v, n)
     if v == 1:
-        # The acting robot alone (every env step): one compiled pass over the fleet.
-        actor = who[:, 0]
-        own = (dist[np.arange(p), actor] + rem[np.arange(p), actor, None])[:, None]  # [P, 1, N]
-        order, ranked = _actor_rivals(dist, rem, actor, k)
-    else:
-        arrival = np.swapaxes(dist + rem[:, :, None], -1, -2)  # [P, N, M]
-        task = np.arange(n)[None, :, None]
-        own = np.swapaxes(arrival[pi, task, who[:, None, :]], -1, -2)  # [P, V, N]
-        if k:
-            order = _rival_order(arrival, own, who, k)  # [P, V, N, k] robot ids
-            tk = np.arange(n)[None, None, :, None]
-            ranked = arrival[pi[..., None], tk, order] - own[..., None]  # [P, V, N, k]
+        # The acting robot alone (every env step): one compiled pass, no [P, N, M] arrays.
+        rel32 = np.empty((p, n, len(RELATION_FEATURES)), dtype=np.float32)
+        rivals32 = np.empty((p, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float32)
+        actor_relations(
+            np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(rem),
+            np.ascontiguousarray(who[:, 0], dtype=np.int64),
+            np.ascontiguousarray(lengths, dtype=np.float64).reshape(p, n),
+            np.ascontiguousarray(waits, dtype=np.float64).reshape(p, n),
+            np.ascontiguousarray(chain, dtype=np.float64).reshape(p, n, n),
+            np.ascontiguousarray(mask, dtype=np.bool_).reshape(p, n), float(scale), k,
+            MISSING * scale, SOFTMIN_TEMPERATURE * scale, rel32, rivals32,
+        )  # fmt: skip
+        return (
+            rel32.reshape(*shape, len(RELATION_FEATURES)),
+            rivals32.reshape(*shape, NUM_RIVALS, len(RIVAL_FEATURES)),
+        )
+    arrival = np.swapaxes(dist + rem[:, :, None], -1, -2)  # [P, N, M]
+    task = np.arange(n)[None, :, None]
+    own = np.swapaxes(arrival[pi, task, who[:, None, :]], -1, -2)  # [P, V, N]
+    if k:
+        order = _rival_order(arrival, own, who, k)  # [P, V, N, k] robot ids
+        tk = np.arange(n)[None, None, :, None]
+        ranked = arrival[pi[..., None], tk, order] - own[..., None]  # [P, V, N, k]
 
     rel = np.zeros((p, v, n, len(RELATION_FEATURES)), dtype=np.float64)
     rel[..., 0] = own
@@ -355,7 +367,6 @@ def relational_features(
     live = mask.reshape(p, 1, n)
     rel = np.where(live[..., None], rel / scale, 0.0)
     rivals = np.where(live[..., None, None], rivals, 0.0)
-    shape = (*lead, v, n)
     return (
         rel.astype(np.float32).reshape(*shape, len(RELATION_FEATURES)),
         rivals.astype(np.float32).reshape(*shape, NUM_RIVALS, len(RIVAL_FEATURES)),

@@ -74,3 +74,46 @@ def test_relational_features_match_oracle(navigator: str, robots: int) -> None:
         obs, *_ = env.last()
         env.step(first_valid(obs))
     assert checked == 20 * robots
+
+
+# --------------------------------------------------------------------------- fast paths
+def test_compiled_rivals_equal_a_stable_sort_of_every_robot() -> None:
+    """The acting robot's rivals (compiled, one pass over the fleet) are the first ``k``
+    of a stable sort of ``arrival - own`` over all other robots: ties (integer grid
+    distances, many robots free now) go to the lowest robot id, at the k-th place too."""
+    from rtaw_marl.envs.features import _actor_rivals
+
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        p, m, n = int(rng.integers(1, 4)), int(rng.integers(2, 40)), int(rng.integers(1, 12))
+        dist = rng.integers(0, 20, (p, m, n)).astype(float)
+        rem = np.where(rng.random((p, m)) < 0.3, 0.0, rng.integers(0, 10, (p, m)) * 0.5)
+        actor = rng.integers(0, m, p)
+        rem[np.arange(p), actor] = 0.0
+        k = min(NUM_RIVALS, m - 1)
+        order, delta = _actor_rivals(dist, rem, actor, k)
+        for i in range(p):
+            for t in range(n):
+                d = (dist[i, :, t] + rem[i]) - (dist[i, actor[i], t] + rem[i, actor[i]])
+                d[actor[i]] = np.inf
+                want = np.argsort(d, kind="stable")[:k]
+                assert order[i, 0, t].tolist() == want.tolist()
+                assert delta[i, 0, t].tolist() == d[want].tolist()
+
+
+@pytest.mark.parametrize("m", [1, 2, 7, 1000])
+def test_fleet_summary_is_quantiles_and_mean_of_the_times_until_free(m: int) -> None:
+    from rtaw_marl.envs.features import FLEET_QUANTILES, fleet_features
+
+    rng = np.random.default_rng(m)
+    free_at = rng.random((3, m)) * 50.0
+    time = np.array([0.0, 10.0, 60.0])
+    got = fleet_features(free_at, time, 60.0)
+    assert got.shape == (3, 8)
+    assert got.dtype == np.float32
+    for b in range(3):
+        remaining = np.sort(np.maximum(free_at[b] - time[b], 0.0))
+        want = [remaining[round(q * (m - 1))] / 60.0 for q in FLEET_QUANTILES]
+        np.testing.assert_allclose(got[b, :-1], want, rtol=1e-6)
+        np.testing.assert_allclose(got[b, -1], remaining.mean() / 60.0, rtol=1e-6)
+    assert not got[2].any()  # everyone free at t = 60

@@ -66,7 +66,8 @@ def test_rows_are_their_members_own_episodes() -> None:
         done = out["next", "done"]
         td = out["next"]
         if done.any():  # OTHER's episodes end first: only they restart
-            assert done[2:].all() and not done[:2].any()
+            assert done[2:].all()
+            assert not done[:2].any()
             td = mixed.reset(td.clone().set("_reset", done.clone()))
             parts[1] = alone[1].reset_to(mixed.episode_seeds[2:].tolist())
             nxt[1] = parts[1]

@@ -144,3 +144,23 @@ def test_critic_without_the_fleet_does_not_read_the_robots() -> None:
     assert not torch.allclose(
         full(*(td[k] for k in full.in_keys)), full(*(other[k] for k in full.in_keys))
     )
+
+
+def test_fleet_summary_critic_reads_a_fixed_size_fleet() -> None:
+    torch.manual_seed(0)
+    actor, critic = build_networks(RTAWPlusConfig(fleet_summary=True))
+    assert critic.in_keys == ("relations", "fleet", "action_mask")
+    assert actor.in_keys == ("relations", "rivals", "action_mask")
+    td = _state(4, 5, 6)
+    fleet = torch.rand(4, 8)
+    value = critic(td["relations"], fleet, td["action_mask"])
+    assert value.shape == (4, 1)
+    # The fleet summary moves the value (it is read, not ignored).
+    assert not torch.equal(value, critic(td["relations"], fleet * 3.0, td["action_mask"]))
+
+
+def test_fleet_summary_needs_a_critic_that_sees_the_fleet() -> None:
+    with pytest.raises(ConfigError, match=r"model\.critic_fleet=false shows it none"):
+        RTAWPlusConfig(fleet_summary=True, critic_fleet=False)
+    with pytest.raises(ConfigError, match=r"model\.fleet_summary must be true or false"):
+        RTAWPlusConfig(fleet_summary="yes")
