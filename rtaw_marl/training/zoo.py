@@ -70,8 +70,9 @@ CURRICULUM_SEEDS = (1000, 1001, 1002, 1003, 1004)
 UNSPELLED = frozenset({"tasks=designated"})
 #: Table II's 100-robot scenarios: their policies and the bases of its curricula.
 TABLE2_BASES = ("open300_direct_m100_random", "C256_astar_m100_random")
-#: The generalist's PPO frames (360 batches of 8192).
-GENERALIST_FRAMES = 2_949_120
+#: The generalist's PPO frames (180 batches of 8192: what fitted the session that
+#: trained it, on 2 cores).
+GENERALIST_FRAMES = 1_474_560
 #: The generalist's keys besides its mix: a fleet summary for the critic (a mix's fleets
 #: differ), two collector processes with two simulators of each of its 16 members, and two learner
 #: threads (RTAW+'s update is twice as fast on both cores; the collectors wait for it).

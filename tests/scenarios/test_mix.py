@@ -43,7 +43,7 @@ def test_generalist_mix_spans_fleets_maps_and_queues_and_holds_out_the_tests() -
     robots = {s.env.num_robots for s in specs}
     assert min(robots) <= 5
     assert max(robots) >= 1000
-    assert {s.env.queue_len for s in specs} >= {5, 10, 20}
+    assert {s.env.queue_len for s in specs} == {5, 10}
     assert {s.env.episode_mode for s in specs} == {"paper", "drain"}
     # The robot counts the generalist is evaluated on as unseen are not trained on.
     assert not robots & {30, 150, 300, 2000, 10_000}
