@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 from rtaw_marl.errors import lookup
 from rtaw_marl.evaluation.analysis import ANALYSIS
+from rtaw_marl.evaluation.generalist import GENERALIST_STUDIES
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.evaluation.study import Cell, PolicyRef, Study, StudyResult, learned, rule
 from rtaw_marl.evaluation.tables import (
@@ -303,6 +304,7 @@ STUDIES: dict[str, Study] = {
               cells=_horizon_cells, render=_horizons, store=True,
               default_seeds=tuple(range(1000, 1020))),
         ANALYSIS,
+        *GENERALIST_STUDIES,
     )
 }  # fmt: skip
 
