@@ -12,6 +12,7 @@ Usage::
 
     python experiments/bench_train.py              # everything (about 10 minutes)
     python experiments/bench_train.py --e2e-only   # the end-to-end table only
+    python experiments/bench_train.py --e2e-only --model rtaw_plus  # RTAW+, M = 100, 1000
     python experiments/bench_train.py --train      # + wall time for rtaw-train to beat MPDM
     python experiments/bench_train.py --quick      # tiny sizes, a smoke run
     python experiments/bench_train.py --backend ray  # local vs Ray actors, end to end
@@ -125,8 +126,13 @@ def bench_time_to_beat_mpdm(frames: int, every: int, algo: str) -> tuple[list[di
 PHASES = ("collect", "gae", "update", "sync", "eval_checkpoint")
 
 
+#: ``--model rtaw_plus``: RTAW+ as the generalist trains (a fixed-size fleet summary for
+#: its critic, so no ``[M, 3]`` input; two learner threads).
+RTAW_PLUS = ("model=rtaw_plus", "model.fleet_summary=true", "torch_threads=2")
+
+
 def bench_end_to_end(
-    m: int, workers: int, frames: int, quick: bool, backend: str = "local"
+    m: int, workers: int, frames: int, quick: bool, backend: str = "local", model: str = "rtaw"
 ) -> dict[str, float]:
     """One ``train()`` run; frames/s overall and in steady state, seconds per batch by phase."""
     from rtaw_marl.training.ppo import train
@@ -134,6 +140,8 @@ def bench_end_to_end(
     overrides = [f"env.num_robots={m}", f"collector.workers={workers}", f"frames={frames}",
                  f"eval.every_frames={frames // 2}", "progress=false",
                  f"collector.backend={backend}"]  # fmt: skip
+    if model == "rtaw_plus":
+        overrides += RTAW_PLUS
     if quick:
         overrides += ["algo.frames_per_batch=1024", "algo.minibatch_size=256"]
     cfg = to_typed(compose("train", overrides))
@@ -148,7 +156,7 @@ def bench_end_to_end(
     return out
 
 
-def end_to_end_table(quick: bool) -> list[str]:
+def end_to_end_table(quick: bool, model: str = "rtaw") -> list[str]:
     lines = [
         "| M | workers | frames | frames/s overall | frames/s steady | s per batch: collect "
         "/ GAE / update / sync / eval+ckpt | target |",
@@ -159,8 +167,11 @@ def end_to_end_table(quick: bool) -> list[str]:
         (10, 1, 163840), (10, 2, 163840), (100, 1, 81920), (100, 2, 81920),
         (1000, 1, 16384),
     ]  # fmt: skip
+    if model == "rtaw_plus":  # issue 24's targets
+        targets = {10: "", 100: ">= 10,000", 1000: ">= 3,000"}
+        sizes = [(10, 1, 8192)] if quick else [(100, 2, 81920), (1000, 2, 49152)]
     for m, workers, frames in sizes:
-        r = bench_end_to_end(m, workers, frames, quick)
+        r = bench_end_to_end(m, workers, frames, quick, model=model)
         phases = " / ".join(f"{r[p]:.2f}" for p in PHASES)
         lines.append(
             f"| {m} | {workers} | {frames:,} | {r['overall']:,.0f} | {r['steady']:,.0f} | "
@@ -207,6 +218,10 @@ def main() -> int:
         help="ray: only the end-to-end table of local workers vs Ray actors",
     )  # fmt: skip
     parser.add_argument("--output", type=Path, default=None)
+    parser.add_argument(
+        "--model", choices=("rtaw", "rtaw_plus"), default="rtaw",
+        help="the end-to-end table's network (rtaw_plus: as the generalist trains)",
+    )  # fmt: skip
     args = parser.parse_args()
     torch.set_num_threads(1)
     lines = [
@@ -220,7 +235,7 @@ def main() -> int:
         if args.output:
             args.output.write_text("\n".join(lines) + "\n")
         return 0
-    lines += end_to_end_table(args.quick)
+    lines += end_to_end_table(args.quick, args.model)
     if args.e2e_only:
         print("\n".join(lines))
         if args.output:
