@@ -21,13 +21,14 @@ $(STAMP): pyproject.toml
 DEMO_RUN := runs/demo
 
 # Train RTAW+ briefly (a lookahead warm start, then PPO), then compare it and the shipped
-# RTAW+ policy of the default scenario with MPDM, RBTS and lookahead on 20 evaluation seeds.
+# generalist RTAW+ (one policy for every scenario) with MPDM, RBTS and lookahead on 20
+# evaluation seeds of the default scenario.
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
 	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
 		frames=40960 eval.every_frames=20480 output_dir=$(DEMO_RUN)
 	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
-		pretrained=shelves_astar_m10_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
+		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
 
 test: $(STAMP)

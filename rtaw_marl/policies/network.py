@@ -27,7 +27,7 @@ from rtaw_marl.models.rtaw_plus import RTAWPlusActor
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["NetworkPolicy", "load_policy"]
+__all__ = ["NetworkPolicy", "checkpoint_path", "load_policy"]
 
 
 def load_policy(
@@ -54,15 +54,19 @@ def load_policy(
             suggests names), or the checkpoint is unreadable, unsafe, for another
             feature layout, or its weights do not fit its model.
     """
-    path = _resolve(source)
+    path = checkpoint_path(source)
     if torch_threads is not None:
         torch.set_num_threads(int(torch_threads))
     actor, _ = load_networks(load_checkpoint(path), path)
     return NetworkPolicy(actor, name=name or f"rtaw:{source}")
 
 
-def _resolve(source: str | Path) -> Path:
-    """The checkpoint file of a path or shipped name."""
+def checkpoint_path(source: str | Path) -> Path:
+    """The checkpoint file of a path or shipped name.
+
+    Raises:
+        ConfigError: Neither a path that exists nor a shipped name (close names listed).
+    """
     path = Path(source)
     # Anything at the path (a folder, a FIFO, a broken symlink) is the checkpoint meant:
     # load_checkpoint says what is wrong with it, rather than "not a shipped name".

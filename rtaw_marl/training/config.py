@@ -245,6 +245,10 @@ class TrainConfig(SimGroups):
             of each. Empty: the run's own scenario alone. The run's scenario still
             picks the checkpoints (``eval.*``). Needs ``model=rtaw_plus`` with
             ``model.fleet_summary=true`` (or ``model.critic_fleet=false``).
+        init_actor: Start the actor from the actor of this checkpoint file or shipped
+            policy name (its weights only: the critic, the optimizer and the run's
+            progress start fresh), e.g. a specialist continued on a mix. Its network must
+            be this run's (``model.name``, ``embed_dim``, ``heads``); ignored on resume.
     """
 
     model: Any
@@ -263,6 +267,7 @@ class TrainConfig(SimGroups):
     progress: bool = True
     interop: bool = False
     mix: list[str] = field(default_factory=list)
+    init_actor: str | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)

@@ -10,6 +10,7 @@ with checkpoints (last and best).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import signal
 import sys
 import time
@@ -25,7 +26,7 @@ from tqdm import tqdm
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.actor_critic import make_actor, make_critic
-from rtaw_marl.models.checkpoint import Actor, Critic, build_networks
+from rtaw_marl.models.checkpoint import Actor, Critic, build_networks, load_networks
 from rtaw_marl.scenarios.mix import mix_specs
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.checkpoints import (
@@ -204,6 +205,8 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
     logger = RunLogger(run_dir, cfg.logger)
+    if cfg.init_actor is not None and progress.frames == 0:
+        _init_actor(cfg, learner.actor_net)
     if cfg.imitation.teacher is not None and progress.frames == 0:
         _warm_start(cfg, spec, learner, logger, reward_scale)
     # Local worker processes or Ray actors; they act on CPUs, the learner on `device`.
@@ -307,6 +310,30 @@ def _warm_start(
     for row in rows:
         logger.log({f"imitation/{k}": v for k, v in row.items() if k != "decisions"},
                    row["decisions"])  # fmt: skip
+
+
+def _init_actor(cfg: TrainConfig, actor: torch.nn.Module) -> None:
+    """Copy the actor weights of ``cfg.init_actor`` (a checkpoint or shipped name).
+
+    Raises:
+        ConfigError: The checkpoint is unreadable, or its actor is another network.
+    """
+    from rtaw_marl.models.checkpoint import load_checkpoint
+    from rtaw_marl.policies.network import checkpoint_path
+
+    path = checkpoint_path(cfg.init_actor)
+    ckpt = load_checkpoint(path)
+    theirs, ours = dict(ckpt["model_config"]), dataclasses.asdict(cfg.model)
+    keys = ("name", "embed_dim", "heads", "head_dim")
+    differ = [k for k in keys if theirs.get(k, ours.get(k)) != ours.get(k)]
+    if differ:
+        k = differ[0]
+        raise ConfigError(
+            f"init_actor={cfg.init_actor}: its actor has model.{k}={theirs.get(k)!r}, this "
+            f"run's model.{k}={ours.get(k)!r}"
+        )
+    actor.load_state_dict(load_networks(ckpt, path)[0].state_dict())
+    print(f"actor initialised from {path}", file=sys.stderr, flush=True)
 
 
 # --------------------------------------------------------------------------- building

@@ -82,7 +82,9 @@ def check_bases(names: Iterable[str], runs: Path = RUNS) -> None:
     names = set(names)
     for name in sorted(names):
         entry = ZOO[name]
-        if entry.base is None or entry.base in names or _base_run(name, runs).exists():
+        # A generalist starts from its base's shipped checkpoint, not from a run.
+        shipped = entry.stage == "generalist"
+        if entry.base is None or shipped or entry.base in names or _base_run(name, runs).exists():
             continue
         raise ConfigError(
             f"{name} continues {entry.base}, but {_base_run(name, runs)} is missing: "

@@ -8,7 +8,7 @@ test_zoo.py`` checks each ``.pt`` against it), :func:`train_command` the whole c
 ``rtaw-zoo`` (:mod:`rtaw_marl.cli.zoo`, run by :mod:`rtaw_marl.training.retrain`)
 retrains entries into ``runs/pretrained/<name>`` and ships their best checkpoints.
 
-Three kinds of entries (:attr:`Recipe.stage`):
+Four kinds of entries (:attr:`Recipe.stage`):
 
 * ``train``: from scratch. The paper's network (``<scenario>``) and RTAW+
   (``<scenario>_plus``) get the same recipe and budget (docs/training.md): a warm start
@@ -21,6 +21,10 @@ Three kinds of entries (:attr:`Recipe.stage`):
   RTAW+ run continued with 500 robots and 2,500-task episodes for
   :data:`CURRICULUM_FRAMES` more PPO frames (``frames=`` counts from that checkpoint),
   selected on seeds 1000-1004.
+* ``generalist``: ``generalist_plus``, one RTAW+ for every setting: the actor of a
+  specialist (:attr:`Recipe.base`) continued with a fresh critic on a scenario mix
+  (:data:`~rtaw_marl.scenarios.mix.GENERALIST`) for :data:`GENERALIST_FRAMES` frames,
+  selected on seeds 1000-1009 of a mix member.
 
 Policies trained with 10 robots also run with 100 or 1000: the networks' sizes do not
 depend on them. This module is plain Python (no torch, no Hydra).
@@ -70,9 +74,9 @@ CURRICULUM_SEEDS = (1000, 1001, 1002, 1003, 1004)
 UNSPELLED = frozenset({"tasks=designated"})
 #: Table II's 100-robot scenarios: their policies and the bases of its curricula.
 TABLE2_BASES = ("open300_direct_m100_random", "C256_astar_m100_random")
-#: The generalist's PPO frames (180 batches of 8192: what fitted the session that
+#: The generalist's PPO frames (150 batches of 8192: what fitted the session that
 #: trained it, on 2 cores).
-GENERALIST_FRAMES = 1_474_560
+GENERALIST_FRAMES = 1_228_800
 #: The generalist's keys besides its mix: a fleet summary for the critic (a mix's fleets
 #: differ), two collector processes with two simulators of each of its 16 members, and two learner
 #: threads (RTAW+'s update is twice as fast on both cores; the collectors wait for it).
@@ -83,7 +87,7 @@ GENERALIST_KEYS = (
     "torch_threads=2",
 )
 #: The kinds of entries.
-STAGES = ("train", "continued", "curriculum")
+STAGES = ("train", "continued", "curriculum", "generalist")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -102,7 +106,8 @@ class Recipe:
         base_frames: A curriculum's base: its best checkpoint's PPO frames.
         seed: The training seed.
         mix: A generalist's training mix (:mod:`rtaw_marl.scenarios.mix`); its
-            :attr:`scenario` then only selects the checkpoints.
+            :attr:`scenario` (with :attr:`env`) then only selects the checkpoints, and
+            its actor starts from :attr:`base`'s (``init_actor``).
     """
 
     name: str
@@ -135,11 +140,16 @@ class Recipe:
         ``<runs>/<base>/checkpoints/best.pt``."""
         if self.stage == "curriculum":
             return self.continuing(f"{runs / str(self.base)}/checkpoints/best.pt", self.base_frames)
-        mixed = (*GENERALIST_KEYS, f"mix=[{','.join(self.mix)}]") if self.mix else ()
+        if self.mix:  # a specialist's actor continued on the mix: no warm start
+            start = (f"init_actor={self.base}", *GENERALIST_KEYS, f"mix=[{','.join(self.mix)}]")
+            tail: tuple[str, ...] = start
+            warm: tuple[str, ...] = ()
+        else:
+            tail, warm = (), WARM_START
         return [
-            *self.scenario_overrides(), f"model={self.model}", "algo=ppo", *WARM_START,
+            *self.scenario_overrides(), f"model={self.model}", "algo=ppo", *warm,
             f"frames={self.budget}", f"eval.every_frames={EVERY_FRAMES}", f"seed={self.seed}",
-            *mixed,
+            *tail,
         ]  # fmt: skip
 
     def continuing(self, checkpoint: str, start_frames: int) -> list[str]:
@@ -187,8 +197,10 @@ def _recipes() -> list[Recipe]:
             )  # fmt: skip
     out.append(
         Recipe(
-            name="generalist_plus", scenario="C_astar_m100", model="rtaw_plus",
-            frames=GENERALIST_FRAMES, mix=GENERALIST,
+            name="generalist_plus", scenario="A_astar_m100",
+            env={"num_robots": 200, "episode_mode": "paper"}, model="rtaw_plus",
+            frames=GENERALIST_FRAMES, stage="generalist", base="C_astar_m100_long_plus",
+            mix=GENERALIST,
         )
     )  # fmt: skip
     return out

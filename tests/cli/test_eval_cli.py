@@ -441,3 +441,25 @@ def test_a_large_seed_range_is_never_parsed_expanded(
     # Everything parsed is an override as typed (Hydra's own parse), never the expansion.
     assert seeds in texts
     assert set(texts) <= {*args, "hydra.mode=RUN"}
+
+
+@pytest.mark.parametrize(
+    "setting",
+    [
+        ["scenario=poc"],  # 2 robots, a queue of 2, 10x10
+        ["row=C", "env.num_robots=37", "env.queue_len=7", "env.num_tasks=40"],
+        ["scenario=open300_direct_m1000_random", "env.num_tasks=60"],
+    ],
+)
+def test_the_generalist_is_selected_by_name_on_any_scenario(
+    cli, tmp_path: Path, setting: list[str]
+) -> None:
+    out = tmp_path / "results.json"
+    result = cli(
+        "eval", *setting, "policy=[mpdm,pretrained]", "pretrained=generalist_plus",
+        "seeds=[0,1]", "progress=false", f"output={out}",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    policies = json.loads(out.read_text())["policies"]
+    assert set(policies) == {"mpdm", "rtaw:generalist_plus"}
+    assert all(ttd > 0 for ttd in policies["rtaw:generalist_plus"]["ttd"])
