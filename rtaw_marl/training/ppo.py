@@ -323,7 +323,9 @@ def _init_actor(cfg: TrainConfig, actor: torch.nn.Module) -> None:
 
     path = checkpoint_path(cfg.init_actor)
     ckpt = load_checkpoint(path)
-    theirs, ours = dict(ckpt["model_config"]), dataclasses.asdict(cfg.model)
+    # A checkpoint's model_config without a name is the paper's network.
+    theirs = {"name": "rtaw", **ckpt["model_config"]}
+    ours = dataclasses.asdict(cfg.model)
     keys = ("name", "embed_dim", "heads", "head_dim")
     differ = [k for k in keys if theirs.get(k, ours.get(k)) != ours.get(k)]
     if differ:

@@ -3,10 +3,13 @@ policy that then acts on each member and on a fleet size none of them had."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies import MPDM
@@ -41,3 +44,30 @@ def test_a_mix_trains_one_policy_for_every_member(train_cfg, tmp_path: Path) -> 
         ttd = evaluate(build_sim(spec), {"net": policy, "mpdm": MPDM()}, [0, 1])
         assert np.isfinite(ttd["net"]["ttd"]).all()
         assert len(ttd["net"]["ttd"]) == 2
+
+
+def test_init_actor_starts_from_a_shipped_actor(train_cfg, tmp_path: Path) -> None:
+    """The run's first evaluation (frame 0) plays the shipped actor: its greedy TTD on
+    the selection seeds is the shipped policy's own."""
+    cfg = train_cfg(
+        [
+            "scenario=C_astar_m10", "env.num_tasks=40", "model=rtaw_plus",
+            "model.fleet_summary=true", "init_actor=C_astar_m10_long_plus",
+            "collector.envs_per_worker=4", "algo.frames_per_batch=256",
+            "algo.minibatch_size=128", "frames=256", "eval.every_frames=256",
+            "eval.seeds=[1000,1001]",
+        ]
+    )  # fmt: skip
+    result = train(cfg, tmp_path)
+    shipped = load_policy("C_astar_m10_long_plus")
+    ttd = evaluate(build_sim(cfg.sim_spec()), {"shipped": shipped}, [1000, 1001])
+    assert result.history[0]["frames"] == 0
+    assert result.history[0]["ttd"] == pytest.approx(np.mean(ttd["shipped"]["ttd"]))
+
+
+def test_init_actor_of_another_network_is_one_error(train_cfg, tmp_path: Path) -> None:
+    cfg = train_cfg(["scenario=poc", "model=rtaw_plus", "init_actor=C_astar_m10",
+                     "frames=512", "collector.envs_per_worker=4"])  # fmt: skip
+    message = "init_actor=C_astar_m10: its actor has model.name='rtaw'"
+    with pytest.raises(ConfigError, match=re.escape(message)):
+        train(cfg, tmp_path)
