@@ -7,7 +7,8 @@ policy trained on (``rtaw-study study=generalist_table1`` etc.).
 * ``generalist_unseen``: robot counts between and beyond the mix's (3, 30, 150, 300 on
   layout C; 2,000 on the 256x256 warehouse), the MovingAI warehouse map and LoRR's
   ``warehouse_large`` (1,000 and 10,000 robots; maps from ``../shared/maps``), with
-  MPDM, ``lookahead``, the nearest specialist and the generalist.
+  MPDM, ``lookahead``, the nearest specialist and the generalist; and the mix member
+  that selected its checkpoint, on the evaluation seeds (its held-out gain).
 """
 
 from __future__ import annotations
@@ -143,6 +144,12 @@ def _unseen() -> dict[str, tuple[Scenario, str]]:
     for m in (10, 100):
         s = _custom(f"movingai_m{m}", movingai, {"num_robots": m, "num_tasks": 500})
         out[f"MovingAI warehouse-10-20-10-2-1, M={m}"] = (s, "C_astar_m100_long_plus")
+    # The setting that selected the generalist's checkpoint (a mix member), on the
+    # evaluation seeds: its selection-seed gain against its held-out gain.
+    out["selection setting: layout A, M=200, paper (trained on)"] = (
+        SCENARIOS["A_astar_m100"].with_env(num_robots=200, episode_mode="paper"),
+        "A_astar_m100_long_plus",
+    )
     for m, tasks in ((1000, 5000), (10_000, 3000)):
         env = {"num_robots": m, "num_tasks": tasks, "episode_mode": "paper"}
         out[f"LoRR warehouse_large, M={m}"] = (
