@@ -77,10 +77,13 @@ TABLE2_BASES = ("open300_direct_m100_random", "C256_astar_m100_random")
 #: The generalist's PPO frames (150 batches of 8192: what fitted the session that
 #: trained it, on 2 cores).
 GENERALIST_FRAMES = 1_228_800
-#: The generalist's keys besides its mix: a fleet summary for the critic (a mix's fleets
+#: The generalist's keys besides its mix: a third of the zoo's learning rate (the actor
+#: is continued, the critic starts fresh: at 1e-3 the first 160k frames made the actor
+#: 4% worse on the selection seeds), a fleet summary for the critic (a mix's fleets
 #: differ), two collector processes with two simulators of each of its 16 members, and two learner
 #: threads (RTAW+'s update is twice as fast on both cores; the collectors wait for it).
 GENERALIST_KEYS = (
+    "algo.lr=0.0003",
     "model.fleet_summary=true",
     "collector.workers=2",
     "collector.envs_per_worker=32",
