@@ -37,7 +37,11 @@ def test_the_zoo_is_every_shipped_name_and_names_real_scenarios() -> None:
         assert entry.stage in STAGES
         assert entry.model == ("rtaw_plus" if name.endswith("_plus") else "rtaw")
         assert (entry.base is None) == (entry.stage == "train")
-        assert entry.base is None or ZOO[entry.base].stage == "train"
+        if entry.stage == "generalist":  # continues a shipped specialist's actor
+            assert ZOO[entry.base].stage != "generalist"
+            assert entry.mix
+        else:
+            assert entry.base is None or ZOO[entry.base].stage == "train"
     with pytest.raises(ConfigError, match="available: A_astar_m10"):
         recipe("nope")
 
