@@ -393,18 +393,14 @@ def _rival_order(arrival: np.ndarray, own: np.ndarray, who: np.ndarray, k: int) 
     """``int [P, V, N, k]``: each view's ``k`` first rivals at each task (``arrival
     [P, N, M]``, ``own [P, V, N]``, ``who [P, V]``).
 
-    One view (the acting robot's, alone or one per simulator of a batch) is ranked on
-    its own, by ``arrival - own``. Several views share one ranking of all robots by
-    arrival: robot ``r``'s ``k`` first rivals are the ``k + 1`` first arrivals less
+    Several views (the acting robot's alone take :func:`_actor_rivals`'s compiled path)
+    share one ranking of all robots by arrival: robot ``r``'s ``k`` first rivals are the
+    ``k + 1`` first arrivals less
     ``r`` (or the ``k`` first when ``r`` is not among them), ``O(M N)`` instead of
     ``O(V M N)``. The values are the same float operations; only rivals with exactly
     equal arrivals at the ``k``-th place may be chosen or ordered differently, so a
     caller that needs the acting row exactly asks for it alone.
     """
-    if who.shape[-1] == 1:
-        m = arrival.shape[-1]
-        delta = np.where(np.arange(m) == who[:, :, None], np.inf, arrival - own[:, 0, :, None])
-        return _first(delta, k)[:, None]  # [P, 1, N, k]
     top = _first(arrival, k + 1)  # [P, N, k + 1] robot ids, first arrival first
     is_self = top[:, None] == who[:, :, None, None]  # [P, V, N, k + 1]
     keep = ~is_self
