@@ -150,7 +150,7 @@ def _unseen() -> dict[str, tuple[Scenario, str]]:
         SCENARIOS["A_astar_m100"].with_env(num_robots=200, episode_mode="paper"),
         "A_astar_m100_long_plus",
     )
-    for m, tasks in ((1000, 5000), (10_000, 3000)):
+    for m, tasks in ((1000, 2000), (10_000, 1000)):
         env = {"num_robots": m, "num_tasks": tasks, "episode_mode": "paper"}
         out[f"LoRR warehouse_large, M={m}"] = (
             _custom(f"lorr_m{m}", lorr, env),
