@@ -125,6 +125,7 @@ episode (tasks, starts, noise) and reseeds `np_random` (a NumPy `Generator`;
 `np_random_seed` is `s`); `reset()` without a seed draws the episode seed from
 `np_random`, so a seeded sequence of episodes is reproducible, and never from the seeds
 reserved for results (0-1999: evaluation and selection; `rtaw_marl.sim.inputs`).
+`env.unwrapped.episode_seed` is the current episode's seed (to replay it).
 
 ## Misuse
 
