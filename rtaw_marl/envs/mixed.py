@@ -26,11 +26,9 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import torch
 from tensordict import TensorDict, TensorDictBase
-from torchrl.data import Binary, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
-from rtaw_marl.envs.features import feature_shapes
-from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
+from rtaw_marl.envs.torchrl import DONE_KEYS, BatchedWarehouseEnv, set_batch_specs
 from rtaw_marl.errors import ConfigError, EnvUsageError, InvalidActionError, usage_error
 from rtaw_marl.sim.builder import SimSpec
 
@@ -38,7 +36,6 @@ __all__ = ["MIXED_KEYS", "MixedBatchedEnv"]
 
 #: The observation entries a mix can stack (every one but ``robots``).
 MIXED_KEYS = ("tasks", "agent", "relations", "rivals", "fleet")
-_DONE = ("done", "terminated", "truncated")
 #: Entries with a queue-slot axis (padded to the longest queue).
 _SLOTTED = frozenset({"tasks", "relations", "rivals", "action_mask"})
 
@@ -84,7 +81,7 @@ class MixedBatchedEnv(EnvBase):
         self._obs: list[TensorDict | None] = [None] * len(self.parts)
         self._live, self._closed = False, False
         self._set_seed(seed)
-        self._make_specs(b, self.queue_len)
+        set_batch_specs(self, self.keys, b, 1, self.queue_len)  # no key has an M axis
 
     @property
     def sims(self) -> list:
@@ -95,20 +92,6 @@ class MixedBatchedEnv(EnvBase):
     def episode_seeds(self) -> np.ndarray:
         """``int64 [B]``: the seed of each simulator's current episode."""
         return np.concatenate([part.episode_seeds for part in self.parts])
-
-    def _make_specs(self, b: int, n: int) -> None:
-        shapes = feature_shapes(1, n)
-        self.observation_spec = Composite(
-            {key: Unbounded(shape=(b, *shapes[key]), dtype=torch.float32) for key in self.keys},
-            action_mask=Binary(n=n, shape=(b, n), dtype=torch.bool),
-            shape=(b,),
-        )
-        self.action_spec = Categorical(n, shape=(b,), dtype=torch.int64)
-        self._action_spec_unbatched = self.full_action_spec["action"]
-        self.reward_spec = Unbounded(shape=(b, 1), dtype=torch.float32)
-        self.done_spec = Composite(
-            {key: Categorical(2, shape=(b, 1), dtype=torch.bool) for key in _DONE}, shape=(b,)
-        )
 
     def _set_seed(self, seed: int | None) -> None:
         base = 0 if seed is None else int(seed)
@@ -136,7 +119,7 @@ class MixedBatchedEnv(EnvBase):
         self._live = True
         out = self._stacked(self._obs)
         zeros = torch.zeros((self.num_envs, 1), dtype=torch.bool)
-        out.update({key: zeros.clone() for key in _DONE})
+        out.update({key: zeros.clone() for key in DONE_KEYS})
         return out
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
@@ -154,7 +137,7 @@ class MixedBatchedEnv(EnvBase):
             outs.append(out)
         self._obs = [out.select(*self.keys, "action_mask") for out in outs]
         stacked = self._stacked(outs)
-        for key in ("reward", *_DONE):
+        for key in ("reward", *DONE_KEYS):
             stacked[key] = torch.cat([out[key] for out in outs])
         return stacked
 

@@ -59,7 +59,29 @@ from rtaw_marl.sim.builder import SimFactory, SimSpec
 from rtaw_marl.sim.config import SimBuffers
 from rtaw_marl.sim.inputs import draw_training_seed, seed_value
 
-__all__ = ["OBSERVATION_KEYS", "BatchedWarehouseEnv"]
+__all__ = ["DONE_KEYS", "OBSERVATION_KEYS", "BatchedWarehouseEnv", "set_batch_specs"]
+
+#: The done flags of every step, ``bool [B, 1]`` each.
+DONE_KEYS = ("done", "terminated", "truncated")
+
+
+def set_batch_specs(env: EnvBase, keys: Iterable[str], b: int, m: int, n: int) -> None:
+    """Give ``env`` (batch ``[b]``) the specs of a warehouse decision stream: the
+    observation entries ``keys`` for ``M = m`` robots and ``N = n`` slots, the masked
+    slot action, the reward and the done flags (``_action_spec_unbatched`` is the action
+    spec whose mask each observation updates)."""
+    shapes = feature_shapes(m, n)
+    env.observation_spec = Composite(
+        {key: Unbounded(shape=(b, *shapes[key]), dtype=torch.float32) for key in keys},
+        action_mask=Binary(n=n, shape=(b, n), dtype=torch.bool),
+        shape=(b,),
+    )
+    env.action_spec = Categorical(n, shape=(b,), dtype=torch.int64)
+    env._action_spec_unbatched = env.full_action_spec["action"]
+    env.reward_spec = Unbounded(shape=(b, 1), dtype=torch.float32)
+    env.done_spec = Composite(
+        {key: Categorical(2, shape=(b, 1), dtype=torch.bool) for key in DONE_KEYS}, shape=(b,)
+    )
 
 
 class BatchedWarehouseEnv(EnvBase):
@@ -123,24 +145,7 @@ class BatchedWarehouseEnv(EnvBase):
         ]
         self.episode_seeds = np.zeros(b, dtype=np.int64)
         self._set_seed(seed)
-        self._make_specs(b, m, n)
-
-    def _make_specs(self, b: int, m: int, n: int) -> None:
-        shapes = feature_shapes(m, n)
-        self.observation_spec = Composite(
-            {key: Unbounded(shape=(b, *shapes[key]), dtype=torch.float32) for key in self.keys},
-            action_mask=Binary(n=n, shape=(b, n), dtype=torch.bool),
-            shape=(b,),
-        )
-        self.action_spec = Categorical(n, shape=(b,), dtype=torch.int64)
-        self._action_spec_unbatched = self.full_action_spec["action"]
-        self.reward_spec = Unbounded(shape=(b, 1), dtype=torch.float32)
-        self.done_spec = Composite(
-            done=Categorical(2, shape=(b, 1), dtype=torch.bool),
-            terminated=Categorical(2, shape=(b, 1), dtype=torch.bool),
-            truncated=Categorical(2, shape=(b, 1), dtype=torch.bool),
-            shape=(b,),
-        )
+        set_batch_specs(self, self.keys, b, m, n)
 
     # ------------------------------------------------------------------ seeding
     def _set_seed(self, seed: int | None) -> None:

@@ -20,6 +20,8 @@ from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.evaluation.study import Cell, PolicyRef, Study, StudyResult, learned, rule
 from rtaw_marl.evaluation.tables import (
     STRONGEST,
+    TABLE1,
+    TABLE2,
     compare,
     mean_cell,
     percent,
@@ -28,7 +30,7 @@ from rtaw_marl.evaluation.tables import (
     share,
     wins,
 )
-from rtaw_marl.scenarios import ROWS, SCENARIOS, Scenario
+from rtaw_marl.scenarios import SCENARIOS, Scenario
 
 __all__ = ["GENERALIST_STUDIES", "SHARED_MAPS"]
 
@@ -36,10 +38,6 @@ __all__ = ["GENERALIST_STUDIES", "SHARED_MAPS"]
 LABEL, NAME = "generalist", "generalist_plus"
 #: The maps the unseen settings read (relative to the repository root).
 SHARED_MAPS = Path("..") / "shared" / "maps"
-TABLE1 = [
-    ROWS[r] for r in ("direct", "direct_m100", *(x for p in "ABCDE" for x in (p, f"{p}_m100")))
-]
-TABLE2 = [f"{grid}_m{m}_random" for m in (500, 1000) for grid in ("open300_direct", "C256_astar")]
 #: Each row's comparisons: the generalist against these.
 AGAINST = ("MPDM", "lookahead", STRONGEST, "RTAW+")
 

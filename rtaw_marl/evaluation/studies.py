@@ -21,6 +21,8 @@ from rtaw_marl.evaluation.tables import (
     LEARNED,
     SHARES,
     STRONGEST,
+    TABLE1,
+    TABLE2,
     compare,
     mean_cell,
     percent,
@@ -32,7 +34,7 @@ from rtaw_marl.evaluation.tables import (
     shares,
     vs,
 )
-from rtaw_marl.scenarios import ROWS, SCENARIOS, Scenario
+from rtaw_marl.scenarios import SCENARIOS, Scenario
 
 __all__ = ["STUDIES", "study"]
 
@@ -44,11 +46,6 @@ RULES: dict[str, PolicyRef] = {
     "hungarian": rule("hungarian"),
     "hindsight": rule("hindsight"),
 }
-#: Table I's scenarios in row order (10 robots, then 100, per layout).
-TABLE1 = [
-    ROWS[r] for r in ("direct", "direct_m100", *(x for p in "ABCDE" for x in (p, f"{p}_m100")))
-]
-TABLE2 = [f"{grid}_m{m}_random" for m in (500, 1000) for grid in ("open300_direct", "C256_astar")]
 
 
 def _policies(

@@ -21,6 +21,7 @@ from rtaw_marl.evaluation.stats import (
     pooled_difference,
     pooled_hindsight_share,
 )
+from rtaw_marl.scenarios import ROWS
 
 __all__ = [
     "LEARNED",
@@ -28,6 +29,8 @@ __all__ = [
     "RULES",
     "SHARES",
     "STRONGEST",
+    "TABLE1",
+    "TABLE2",
     "compare",
     "mean_cell",
     "percent",
@@ -43,6 +46,13 @@ __all__ = [
 ]
 
 Row = Mapping[str, Sequence[float]]
+
+#: Table I's scenarios in row order (10 robots, then 100, per layout).
+TABLE1 = [
+    ROWS[r] for r in ("direct", "direct_m100", *(x for p in "ABCDE" for x in (p, f"{p}_m100")))
+]
+#: Table II's scenarios in row order.
+TABLE2 = [f"{grid}_m{m}_random" for m in (500, 1000) for grid in ("open300_direct", "C256_astar")]
 
 #: Rule labels of the tables, then the learned ones, in column order.
 RULE_LABELS = ("MPDM", "RBTS", "lookahead", "hungarian", "hindsight")
