@@ -207,9 +207,9 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
                 f"policy={name} needs the training extra ({exc.name!r} is not installed): "
                 "pip install 'rtaw_marl[train]'"
             ) from None
-        threads = int(cfg.torch_threads)
-        for label, path in _learned(name, sources[name]).items():
-            policies[label] = load_policy(path, name=label, torch_threads=threads)
+        threads, k = int(cfg.torch_threads), cfg.candidates
+        for label, path in _learned(name, sources[name], k).items():
+            policies[label] = load_policy(path, name=label, torch_threads=threads, candidates=k)
     return policies
 
 
@@ -223,22 +223,27 @@ def learned_files(cfg: Any, names: list[str]) -> dict[str, Path]:
     for option in ("checkpoint", "pretrained"):
         if option not in names:
             continue
-        for label, source in _learned(option, as_list(getattr(cfg, option))).items():
+        learned = _learned(option, as_list(getattr(cfg, option)), cfg.candidates)
+        for label, source in learned.items():
             # A checkpoint= value that is no file loaded as a shipped name.
             path = Path(source)
             files[label] = path if path.is_file() else pretrained_path(str(source))
     return files
 
 
-def _learned(option: str, sources: list[str]) -> dict[str, str | Path]:
-    """Label (``rtaw:<source>``) -> what ``load_policy`` loads for each ``checkpoint=``
+def _learned(option: str, sources: list[str], candidates: int | None) -> dict[str, str | Path]:
+    """Label (``rtaw:<source>``, ``rtaw:<source>@k<K>`` with ``candidates=K``) -> what
+    ``load_policy`` loads for each ``checkpoint=``
     value (a path, or a shipped name) or ``pretrained=`` value (a shipped name only,
     never a file)."""
     from rtaw_marl.policies.pretrained.registry import pretrained_path
 
+    # A policy restricted to K candidates is another policy: its own label (and journal
+    # entries).
+    tag = "" if candidates is None else f"@k{candidates}"
     if option == "pretrained":
-        return {f"rtaw:{source}": pretrained_path(source) for source in sources}
-    return {f"rtaw:{source}": source for source in sources}
+        return {f"rtaw:{source}{tag}": pretrained_path(source) for source in sources}
+    return {f"rtaw:{source}{tag}": source for source in sources}
 
 
 def as_list(value: object) -> list[str]:

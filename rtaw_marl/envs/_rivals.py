@@ -67,7 +67,7 @@ def actor_relations(
     who: np.ndarray,
     lengths: np.ndarray,
     waits: np.ndarray,
-    chain: np.ndarray,
+    nearest: np.ndarray,
     mask: np.ndarray,
     scale: float,
     k: int,
@@ -84,8 +84,8 @@ def actor_relations(
 
     Args:
         dist: ``float64 [P, M, N]``; rem: ``float64 [P, M]`` (clipped at 0); who:
-            ``int64 [P]``; lengths, waits: ``float64 [P, N]``; chain: ``float64
-            [P, N, N]``; mask: ``bool [P, N]``.
+            ``int64 [P]``; lengths, waits: ``float64 [P, N]``; nearest: ``float64
+            [P, N]`` (``inf``: no other task); mask: ``bool [P, N]``.
         scale: ``L``. k: rivals kept (``min(K, M - 1)``). missing: the value of a missing
             rival or chain, in cells (``MISSING * L``). temperature: the soft-min's, in
             cells.
@@ -104,10 +104,6 @@ def actor_relations(
         for t in range(n):
             if not mask[p, t]:
                 continue
-            nearest = np.inf
-            for j in range(n):
-                if j != t and mask[p, j] and chain[p, t, j] < nearest:
-                    nearest = chain[p, t, j]
             row = np.empty(8)
             row[0] = dist[p, actor, t] + rem[p, actor]
             row[1] = lengths[p, t]
@@ -116,7 +112,7 @@ def actor_relations(
             row[4] = missing
             row[5] = missing
             row[6] = missing
-            row[7] = nearest if nearest < np.inf else missing
+            row[7] = nearest[p, t] if nearest[p, t] < np.inf else missing
             if k:
                 low = delta[p, t, 0]
                 total = 0.0

@@ -50,9 +50,11 @@ __all__ = [
     "SOFTMIN_TEMPERATURE",
     "TASK_FEATURES",
     "Decision",
+    "candidate_slots",
     "decision_features",
     "feature_shapes",
     "fleet_features",
+    "nearest_other",
     "relational_features",
     "robot_features",
     "sim_observation",
@@ -122,6 +124,10 @@ class Decision:
     ``own_distances`` by ``tasks``; ``distances``, ``waits`` and ``chain`` by the
     relational keys and by views of other robots (:func:`decision_features`).
 
+    A decision may hold a subset of the queue (:func:`candidate_slots`, the ``K``
+    candidates a policy scores): the slot arrays then have ``K`` entries, and
+    ``nearest`` still looks over the whole queue.
+
     Attributes:
         robot_xy: ``int [..., M, 2]`` the cell where each robot will next be free.
         free_at: ``float64 [..., M]`` when each robot is free.
@@ -134,7 +140,8 @@ class Decision:
         own_distances: ``float64 [..., N]`` the acting robot's distance to each origin.
         distances: ``float64 [..., M, N]`` every robot's distance to each origin.
         waits: ``float64 [..., N]`` time each task has waited in the queue.
-        chain: ``float64 [..., N, N]`` from each queued destination to each origin.
+        nearest: ``float64 [..., N]`` from each queued destination to the nearest
+            origin of another queued task (``inf``: none).
     """
 
     robot_xy: np.ndarray
@@ -148,20 +155,24 @@ class Decision:
     own_distances: np.ndarray | None = None
     distances: np.ndarray | None = None
     waits: np.ndarray | None = None
-    chain: np.ndarray | None = None
+    nearest: np.ndarray | None = None
 
     @classmethod
-    def of_sim(cls, sim: WarehouseSim, keys: Iterable[str] = FEATURES) -> Decision:
-        """``sim``'s current decision, with only the arrays that ``keys`` need."""
+    def of_sim(
+        cls, sim: WarehouseSim, keys: Iterable[str] = FEATURES, slots: np.ndarray | None = None
+    ) -> Decision:
+        """``sim``'s current decision, with only the arrays that ``keys`` need; with
+        ``slots int [K]``, of these queue slots only (in their order)."""
         keys = set(keys)
         relational = bool(keys & set(RELATIONAL_KEYS))
+        pick = slice(None) if slots is None else np.asarray(slots)
         return cls(
-            sim.robot_xy, sim.robot_free_at, sim.time, sim.robot, sim.queue_rows,
-            sim.queue_length, sim.queue_mask, sim.layout.scale,
-            own_distances=sim.robot_distances() if "tasks" in keys else None,
-            distances=sim.distance_matrix() if relational else None,
-            waits=sim.queue_waits() if relational else None,
-            chain=sim.chain_distances() if relational else None,
+            sim.robot_xy, sim.robot_free_at, sim.time, sim.robot, sim.queue_rows[pick],
+            sim.queue_length[pick], sim.queue_mask[pick], sim.layout.scale,
+            own_distances=sim.robot_distances()[pick] if "tasks" in keys else None,
+            distances=sim.distance_matrix(slots) if relational else None,
+            waits=sim.queue_waits()[pick] if relational else None,
+            nearest=sim.chain_nearest(slots) if relational else None,
         )  # fmt: skip
 
 
@@ -202,7 +213,7 @@ def decision_features(
         who = np.asarray(d.robot)[..., None] if viewers is None else np.asarray(viewers)
         remaining = d.free_at - np.asarray(d.time, dtype=np.float64)[..., None]
         rel, rivals = relational_features(
-            d.distances, remaining, who, d.queue_length, d.waits, d.chain, d.queue_mask,
+            d.distances, remaining, who, d.queue_length, d.waits, d.nearest, d.queue_mask,
             d.scale,
         )  # fmt: skip
         # One view per leading index: drop the viewer axis.
@@ -289,7 +300,7 @@ def relational_features(
     viewers: np.ndarray,
     lengths: np.ndarray,
     waits: np.ndarray,
-    chain: np.ndarray,
+    nearest: np.ndarray,
     mask: np.ndarray,
     scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -305,7 +316,8 @@ def relational_features(
         viewers: ``int [..., V]`` the robots whose views are computed.
         lengths: ``float [..., N]`` task lengths.
         waits: ``float [..., N]`` time each task has waited in the queue.
-        chain: ``float [..., N, N]`` from each queued destination to each queued origin.
+        nearest: ``float [..., N]`` from each queued destination to the nearest origin of
+            another queued task (``inf``: none; the feature is then :data:`MISSING`).
         mask: ``bool [..., N]`` which slots hold a task.
         scale: ``L``.
 
@@ -331,7 +343,7 @@ def relational_features(
             np.ascontiguousarray(who[:, 0], dtype=np.int64),
             np.ascontiguousarray(lengths, dtype=np.float64).reshape(p, n),
             np.ascontiguousarray(waits, dtype=np.float64).reshape(p, n),
-            np.ascontiguousarray(chain, dtype=np.float64).reshape(p, n, n),
+            np.ascontiguousarray(nearest, dtype=np.float64).reshape(p, n),
             np.ascontiguousarray(mask, dtype=np.bool_).reshape(p, n), float(scale), k,
             MISSING * scale, SOFTMIN_TEMPERATURE * scale, rel32, rivals32,
         )  # fmt: skip
@@ -352,7 +364,8 @@ def relational_features(
     rel[..., 1] = lengths.reshape(p, 1, n)
     rel[..., 2] = waits.reshape(p, 1, n)
     rel[..., 3:7] = MISSING * scale
-    rel[..., 7] = _nearest_other(chain, mask, MISSING * scale).reshape(p, 1, n)
+    near = np.asarray(nearest, dtype=np.float64).reshape(p, 1, n)
+    rel[..., 7] = np.where(np.isfinite(near), near, MISSING * scale)
     rivals = np.zeros((p, v, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float64)
     if k:
         pk, tk = pi[..., None], np.arange(n)[None, None, :, None]
@@ -425,12 +438,39 @@ def _softmin(values: np.ndarray, temperature: float) -> np.ndarray:
     return low - temperature * np.log(np.exp(-(values - low[..., None]) / temperature).sum(-1))
 
 
-def _nearest_other(chain: np.ndarray, mask: np.ndarray, missing: float) -> np.ndarray:
-    """``[..., N]`` distance from each destination to the nearest *other* queued origin."""
+def nearest_other(chain: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """``float64 [..., N]``: from each destination to the nearest *other* queued origin
+    (``chain [..., N, N]`` destinations x origins), ``inf`` for none or an empty slot."""
     n = mask.shape[-1]
     other = mask[..., None, :] & ~np.eye(n, dtype=bool)
-    d = np.where(other, chain, np.inf).min(axis=-1)
-    return np.where(np.isfinite(d), d, missing)
+    d = np.where(other, chain, np.inf).min(axis=-1, initial=np.inf)
+    return np.where(mask, d, np.inf)
+
+
+def candidate_slots(own_distances: np.ndarray, mask: np.ndarray, k: int) -> np.ndarray:
+    """The ``k`` queued tasks a policy scores when the queue holds more: those whose
+    origins are nearest the acting robot (ties: the lowest slot), in slot order.
+
+    Args:
+        own_distances: ``float [N]`` the acting robot's distance to each origin, as its
+            observation holds it (any scale: only the order matters).
+        mask: ``bool [N]`` which slots hold a task.
+        k: Candidates kept (``>= 1``).
+
+    Returns:
+        ``int64 [min(k, N)]`` slot ids, ascending; every one holds a task when at least
+        ``k`` do (else the empty slots fill the rest and stay masked).
+    """
+    n = mask.shape[-1]
+    if k >= n:
+        return np.arange(n)
+    key = np.where(mask, own_distances, np.inf)
+    # Stable on (distance, slot): a partition then a sort of the k kept.
+    part = np.argpartition(key, k - 1)[:k]
+    cut = key[part].max()
+    below = np.flatnonzero(key < cut)
+    tied = np.flatnonzero(key == cut)[: k - len(below)]
+    return np.sort(np.concatenate([below, tied]))
 
 
 def sim_relations(sim: WarehouseSim) -> tuple[np.ndarray, np.ndarray]:
@@ -439,8 +479,12 @@ def sim_relations(sim: WarehouseSim) -> tuple[np.ndarray, np.ndarray]:
     return obs["relations"], obs["rivals"]
 
 
-def sim_observation(sim: WarehouseSim, keys: Iterable[str]) -> dict[str, np.ndarray]:
+def sim_observation(
+    sim: WarehouseSim, keys: Iterable[str], slots: np.ndarray | None = None
+) -> dict[str, np.ndarray]:
     """The acting robot's observation entries ``keys`` and ``action_mask`` (bool), as
-    the envs give them (:func:`decision_features`), computing only what ``keys`` need."""
+    the envs give them (:func:`decision_features`), computing only what ``keys`` need;
+    with ``slots int [K]``, the task entries of these slots only (the rows the full
+    observation holds for them, bit for bit)."""
     keys = tuple(keys)
-    return decision_features(Decision.of_sim(sim, keys), keys)
+    return decision_features(Decision.of_sim(sim, keys, slots), keys)

@@ -129,7 +129,7 @@ class BatchedWarehouseEnv(EnvBase):
         self._robot = np.zeros(b, dtype=np.int64)
         self._dist = np.zeros((b, n), dtype=np.float64)
         self._all_dist = np.zeros((b, m, n), dtype=np.float64)
-        self._chain = np.zeros((b, n, n), dtype=np.float64)
+        self._nearest = np.zeros((b, n), dtype=np.float64)
         self._wait = np.zeros((b, n), dtype=np.float64)
         self.sims = [
             factory(
@@ -256,14 +256,14 @@ class BatchedWarehouseEnv(EnvBase):
             self._dist[i] = sim.robot_distances()
         if self._relational:
             self._all_dist[i] = sim.distance_matrix()
-            self._chain[i] = sim.chain_distances()
+            self._nearest[i] = sim.chain_nearest()
             self._wait[i] = sim.queue_waits()
 
     def _observation(self) -> TensorDict:
         decision = Decision(
             self._robot_xy, self._free_at, self._time, self._robot, self._rows, self._length,
             self._mask, self.scale, own_distances=self._dist, distances=self._all_dist,
-            waits=self._wait, chain=self._chain,
+            waits=self._wait, nearest=self._nearest,
         )  # fmt: skip
         features = decision_features(decision, self.keys)
         mask = torch.from_numpy(features["action_mask"])

@@ -37,6 +37,9 @@ class EvalConfig(SimGroups):
             ``output`` and setting) instead of running them again.
         progress: Show a tqdm progress bar.
         torch_threads: torch intra-op threads for network policies.
+        candidates: Learned policies score only the ``K`` queued tasks whose origins are
+            nearest the free robot when the queue holds more (a decision then costs
+            ``O(K)`` network work); ``None``: every queued task.
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
     """
 
@@ -50,11 +53,14 @@ class EvalConfig(SimGroups):
     resume: bool = False
     progress: bool = True
     torch_threads: int = 1
+    candidates: int | None = None
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
 
     def __post_init__(self) -> None:
         check_fields(self)
         at_least(self, "", 1, "torch_threads")
+        if self.candidates is not None:
+            at_least(self, "", 1, "candidates")
         seeds = self.seeds
         if isinstance(seeds, (list, tuple)):
             if not seeds:
@@ -82,6 +88,9 @@ class RenderConfig(SimGroups):
         max_frames: Refuse to draw more frames than this.
         cell_px: Pixels per grid cell; ``None`` picks about 600 px across.
         torch_threads: torch intra-op threads for network policies.
+        candidates: Learned policies score only the ``K`` queued tasks whose origins are
+            nearest the free robot when the queue holds more (a decision then costs
+            ``O(K)`` network work); ``None``: every queued task.
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
     """
 
@@ -97,12 +106,15 @@ class RenderConfig(SimGroups):
     max_frames: int = 1000
     cell_px: int | None = None
     torch_threads: int = 1
+    candidates: int | None = None
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
 
     def __post_init__(self) -> None:
         check_fields(self)
         seed_value(self.seed, "seed")
         at_least(self, "", 1, "fps", "every", "max_frames", "torch_threads")
+        if self.candidates is not None:
+            at_least(self, "", 1, "candidates")
         at_least(self, "", 0, "start")
         if self.stop is not None:
             at_least(self, "", 0, "stop")

@@ -6,6 +6,11 @@ very arrays of :func:`~rtaw_marl.envs.features.decision_features`, so they choos
 same slot bit for bit. The paper's network (``model=rtaw``) reads ``robots``, ``tasks``
 and ``agent``: it needs ``observation="full"``; RTAW+ (``model=rtaw_plus``) reads
 ``relations`` and ``rivals``: ``"full"`` or ``"compact"``; dict or flat features alike.
+
+With ``candidates=K`` a policy scores only the ``K`` queued tasks whose origins are
+nearest the free robot (:func:`~rtaw_marl.envs.features.candidate_slots`) when the queue
+holds more: on the fast path only their features are computed, so a decision costs
+``O(K)`` network work and ``O(N)`` cheap distance lookups, not ``O(N)`` network work.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from rtaw_marl.envs.features import sim_observation
+from rtaw_marl.envs.features import candidate_slots, sim_observation
 from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import Actor, load_checkpoint, load_networks
@@ -29,9 +34,16 @@ from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["NetworkPolicy", "checkpoint_path", "load_policy"]
 
+#: Observation entries with one row per queue slot (what ``candidates`` selects from).
+_PER_TASK = frozenset({"tasks", "relations", "rivals"})
+
 
 def load_policy(
-    source: str | Path, *, name: str | None = None, torch_threads: int | None = 1
+    source: str | Path,
+    *,
+    name: str | None = None,
+    torch_threads: int | None = 1,
+    candidates: int | None = None,
 ) -> NetworkPolicy:
     """A greedy policy from a checkpoint file or a shipped pretrained name.
 
@@ -45,6 +57,8 @@ def load_policy(
         torch_threads: ``torch.set_num_threads`` for the process (one decision is a small
             network: with every thread an episode takes about ten times longer);
             ``None`` leaves torch as it is.
+        candidates: Score only the ``K`` tasks nearest the free robot when the queue
+            holds more (:class:`NetworkPolicy`); ``None``: every queued task.
 
     Returns:
         The policy: ``act(observation) -> int`` and ``act_sim(sim) -> int``.
@@ -58,7 +72,7 @@ def load_policy(
     if torch_threads is not None:
         torch.set_num_threads(int(torch_threads))
     actor, _ = load_networks(load_checkpoint(path), path)
-    return NetworkPolicy(actor, name=name or f"rtaw:{source}")
+    return NetworkPolicy(actor, name=name or f"rtaw:{source}", candidates=candidates)
 
 
 def checkpoint_path(source: str | Path) -> Path:
@@ -89,11 +103,23 @@ class NetworkPolicy:
         net: A trained actor (``in_keys`` name its observation entries, the action mask
             last; ``net(*inputs)`` gives logits ``[*, N]``).
         name: Label used in result tables.
+        candidates: ``K``: when the queue holds more than ``K`` slots, score only the
+            ``K`` tasks whose origins are nearest the free robot (ties: the lowest
+            slot); ``None``: every queued task. Both paths retrieve the same ``K``
+            (from the float32 distance the observation holds).
+
+    Raises:
+        ConfigError: ``candidates`` is not an integer >= 1.
     """
 
-    def __init__(self, net: Actor, name: str = "rtaw") -> None:
+    def __init__(self, net: Actor, name: str = "rtaw", candidates: int | None = None) -> None:
+        if candidates is not None and (
+            isinstance(candidates, bool) or not isinstance(candidates, int) or candidates < 1
+        ):
+            raise ConfigError(f"candidates must be an integer >= 1 or None, got {candidates!r}")
         self.net = net.eval()
         self.name = name
+        self.candidates = candidates
         self._features = tuple(key for key in net.in_keys if key != "action_mask")
         # RTAW+'s inputs have no fleet axis, so one frozen TorchScript trace serves every
         # decision: a third of the eager call's Python overhead, the same logits bit for
@@ -107,8 +133,15 @@ class NetworkPolicy:
     @torch.no_grad()
     def act_sim(self, sim: WarehouseSim) -> int:
         """The slot with the largest logit among the non-empty ones (fast path)."""
-        obs = sim_observation(sim, self._features)
-        return self._argmax([obs[key] for key in self._features], obs["action_mask"])
+        slots = None
+        if self.candidates is not None and sim.queue_len > self.candidates:
+            # The key the observation holds (distance / L in float32), so act() on the
+            # env's observation retrieves exactly these slots.
+            key = (sim.robot_distances() / sim.layout.scale).astype(np.float32)
+            slots = candidate_slots(key, sim.queue_mask, self.candidates)
+        obs = sim_observation(sim, self._features, slots)
+        best = self._argmax([obs[key] for key in self._features], obs["action_mask"])
+        return best if slots is None else int(slots[best])
 
     @torch.no_grad()
     def act(self, observation: Mapping[str, Any]) -> int:
@@ -124,7 +157,13 @@ class NetworkPolicy:
         """
         features = read_features(observation, self._features, self.name)
         mask = np.asarray(observation["action_mask"]).astype(bool)
-        return self._argmax([features[key] for key in self._features], mask)
+        if self.candidates is None or len(mask) <= self.candidates:
+            return self._argmax([features[key] for key in self._features], mask)
+        # relations[:, 0] and tasks[:, 4] both hold the free robot's distance / L.
+        key = features["relations"][:, 0] if "relations" in features else features["tasks"][:, 4]
+        slots = candidate_slots(key, mask, self.candidates)
+        inputs = [x[slots] if k in _PER_TASK else x for k, x in features.items()]
+        return int(slots[self._argmax(inputs, mask[slots])])
 
     def _argmax(self, inputs: list[np.ndarray], mask: np.ndarray) -> int:
         # np.require: torch wants writable arrays (env observations may be shared views).

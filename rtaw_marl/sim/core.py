@@ -241,14 +241,26 @@ class WarehouseSim:
             self._dist = self._slots.distances_from_one(int(x), int(y))
         return self._dist
 
-    def distance_matrix(self) -> np.ndarray:
-        """Distances ``float64 [M, N]`` from every robot's cell to each queued origin."""
-        return self._slots.distances_from(self.robot_xy)
+    def distance_matrix(self, slots: np.ndarray | None = None) -> np.ndarray:
+        """Distances ``float64 [M, N]`` from every robot's cell to each queued origin
+        (``[M, K]`` to the origins of ``slots int [K]`` only, when given)."""
+        return self._slots.distances_from(self.robot_xy, slots)
 
     def chain_distances(self) -> np.ndarray:
         """Distances ``float64 [N, N]`` from each queued destination (rows) to each queued
         origin (columns): how well one task leads into another. Empty slots: meaningless."""
         return self._slots.distances_from(self.queue_rows[:, 2:])
+
+    def chain_nearest(self, slots: np.ndarray | None = None) -> np.ndarray:
+        """``float64 [N]`` (or ``[K]`` for ``slots int [K]``): the distance from each
+        queued destination to the nearest origin of *another* queued task, ``inf`` when
+        there is none (or the slot is empty). ``O(K N)`` distance lookups."""
+        rows = np.arange(self.queue_len) if slots is None else np.asarray(slots)
+        chain = self._slots.distances_from(self.queue_rows[rows, 2:])  # [K, N]
+        other = np.broadcast_to(self.queue_mask, chain.shape).copy()
+        other[np.arange(len(rows)), rows] = False
+        nearest = np.where(other, chain, np.inf).min(axis=-1, initial=np.inf)
+        return np.where(self.queue_mask[rows], nearest, np.inf)
 
     def queue_waits(self) -> np.ndarray:
         """``float64 [N]`` time each queued task has waited in the queue (0 when empty)."""

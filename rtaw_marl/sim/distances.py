@@ -51,8 +51,9 @@ class TargetSlots(ABC):
         """Make cell ``(x, y)`` the target of ``slot``."""
 
     @abstractmethod
-    def distances_from(self, xy: np.ndarray) -> np.ndarray:
-        """Distances ``float64 [P, N]`` from each cell of ``xy [P, 2]`` to each slot."""
+    def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
+        """Distances ``float64 [P, N]`` from each cell of ``xy [P, 2]`` to each slot (to
+        the slots ``int [K]`` only when given: ``[P, K]``)."""
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         """Distances ``float64 [N]`` from cell ``(x, y)`` to each slot."""
@@ -132,9 +133,10 @@ class _DirectSlots(TargetSlots):
         self._xy[slot, 0] = x
         self._xy[slot, 1] = y
 
-    def distances_from(self, xy: np.ndarray) -> np.ndarray:
+    def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
         xy = np.asarray(xy, dtype=np.float64)
-        return np.hypot(xy[:, 0:1] - self._xy[:, 0], xy[:, 1:2] - self._xy[:, 1])
+        targets = self._xy if slots is None else self._xy[slots]
+        return np.hypot(xy[:, 0:1] - targets[:, 0], xy[:, 1:2] - targets[:, 1])
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         return np.hypot(x - self._xy[:, 0], y - self._xy[:, 1])
@@ -291,9 +293,12 @@ class _FieldSlots(TargetSlots):
     def set(self, slot: int, x: int, y: int) -> None:
         self._fields[slot] = self._nav.field(x, y)
 
-    def distances_from(self, xy: np.ndarray) -> np.ndarray:
+    def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
         idx = self._nav._padded_index(xy)
-        return self._fields[:, idx].T.astype(np.float64)
+        if slots is None:
+            return self._fields[:, idx].T.astype(np.float64)
+        # One gather of the [K, P] entries (never a copy of K whole fields).
+        return self._fields[np.asarray(slots)[:, None], idx].T.astype(np.float64)
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         return self._fields[:, (y + 1) * self._nav._wp + x + 1].astype(np.float64)

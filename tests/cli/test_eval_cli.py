@@ -463,3 +463,20 @@ def test_the_generalist_is_selected_by_name_on_any_scenario(
     policies = json.loads(out.read_text())["policies"]
     assert set(policies) == {"mpdm", "rtaw:generalist_plus"}
     assert all(ttd > 0 for ttd in policies["rtaw:generalist_plus"]["ttd"])
+
+
+def test_candidates_restrict_learned_policies_under_their_own_label(tmp_path: Path, cli) -> None:
+    """``candidates=K`` evaluates the learned policy on the K nearest tasks, labelled
+    ``rtaw:NAME@kK`` (its own journal entries); it is one clear error when not >= 1."""
+    out = tmp_path / "k.json"
+    result = cli(
+        "eval", "scenario=poc", "env.queue_len=12", "policy=pretrained",
+        "pretrained=shelves_astar_m10_plus", "candidates=4", "seeds=[0,1]", "progress=false",
+        f"output={out}",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    assert list(json.loads(out.read_text())["policies"]) == ["rtaw:shelves_astar_m10_plus@k4"]
+    bad = cli("eval", "scenario=poc", "candidates=0", "progress=false")
+    assert bad.code == 2
+    assert "candidates must be >= 1" in bad.err
+    assert "Traceback" not in bad.err

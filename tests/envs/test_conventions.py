@@ -21,7 +21,7 @@ from gymnasium.utils import seeding
 from pettingzoo.test import api_test, performance_benchmark, render_test, seed_test
 
 from rtaw_marl import warehouse_v1
-from rtaw_marl.envs.features import relational_features
+from rtaw_marl.envs.features import nearest_other, relational_features
 from rtaw_marl.envs.observations import FEATURE_KEYS
 from rtaw_marl.envs.pettingzoo import zero_info
 from rtaw_marl.sim.metrics import EpisodeMetrics
@@ -189,6 +189,7 @@ def test_views_of_all_robots_equal_the_one_robot_function() -> None:
         distances, remaining = rng.random((m, n)) * 30, rng.random(m) * 10
         lengths, waits, chain = rng.random(n), rng.random(n), rng.random((n, n)) * 20
         mask = rng.random(n) > 0.3
+        chain = nearest_other(chain, mask)
         every = np.arange(m)
         rel, riv = relational_features(
             distances, remaining, every, lengths, waits, chain, mask, 23.0
