@@ -64,6 +64,11 @@ def parser() -> argparse.ArgumentParser:
         help="an extra override of the sweep (hydra.launcher.*, collector.*), repeatable",
     )  # fmt: skip
     p.add_argument("--print", action="store_true", help="print the command(s) only")
+    p.add_argument(
+        "--reselect", action="store_true",
+        help="rerun the entries' second selection stage on their finished runs and ship its pick",
+    )  # fmt: skip
+    p.add_argument("--workers", type=int, default=1, help="second-stage settings at once")
     return p
 
 
@@ -92,6 +97,10 @@ def run(argv: list[str] | None = None) -> int:
             print(shlex.join(cmd))
             return 0
         retrain.train_sweep(names, args.launcher, args.set, args.runs, args.ship_to, curves)
+        return 0
+    if args.reselect:
+        for name in names:
+            print(retrain.reselect(name, args.runs, args.ship_to, curves, args.workers))
         return 0
     if args.print:
         for name in names:

@@ -11,6 +11,8 @@ A checkpoint is a ``torch.save`` dict:
 ``frames``        frames collected so far; ``iteration``: updates done
 ``eval``          the latest evaluation figures; ``history``: every evaluation so far
 ``command``       the command line
+``selection``     a shipped policy's second selection stage, when it had one (its pick,
+                  settings, seeds and each candidate's gain)
 
 It is written to a temporary file in the same folder, fsynced and renamed over the
 target, so a kill at any moment leaves the previous or the new checkpoint, both loadable.

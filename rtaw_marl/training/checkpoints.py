@@ -41,6 +41,7 @@ __all__ = [
     "check_training_payload",
     "clean_interrupted_writes",
     "resume",
+    "top_name",
     "trim_csv_logs",
 ]
 
@@ -91,6 +92,23 @@ class Checkpoints:
         if better:
             save_checkpoint(self.best, payload)
         save_checkpoint(self.last, payload)
+        if self.cfg.eval.keep > 1:
+            self._keep_top(payload, history)
+
+    def _keep_top(self, payload: dict[str, Any], history: list[dict[str, float]]) -> None:
+        """``top/<frames>.pt`` for the ``eval.keep`` best evaluations of ``history`` (ties:
+        the earlier), weights only; a file that drops out of them is removed. Decided
+        from the history alone, so a resumed run keeps the same files."""
+        top = sorted(history, key=lambda r: (r["ttd"], r["frames"]))[: self.cfg.eval.keep]
+        kept = {top_name(int(r["frames"])) for r in top}
+        folder = self.last.parent / "top"
+        name = top_name(self.progress.frames)
+        if name in kept:
+            folder.mkdir(exist_ok=True)
+            save_checkpoint(folder / name, {k: v for k, v in payload.items() if k != "optimizer"})
+        for old in folder.glob("*.pt") if folder.is_dir() else ():
+            if old.name not in kept:
+                old.unlink()
 
     def save_last(self, history: list[dict[str, float]]) -> Path | None:
         """Write ``last.pt`` between evaluations (on Ctrl-C); ``None`` before the first
@@ -113,6 +131,11 @@ class Checkpoints:
             "eval": row,
             "history": list(history),
         }
+
+
+def top_name(frames: int) -> str:
+    """The file name of the kept checkpoint at ``frames`` (``eval.keep``)."""
+    return f"{frames:012d}.pt"
 
 
 def resume(

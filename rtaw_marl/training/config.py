@@ -153,14 +153,19 @@ class TrainEvalConfig:
         seeds: Selection seeds (1000-1009), played in lockstep; at least 1000 (an error
             otherwise): the evaluation seeds 0-19 are never used for training or
             selection.
+        keep: Also keep the ``keep`` best evaluations' checkpoints (weights only) in
+            ``checkpoints/top/<frames>.pt``: the candidates of a second selection stage
+            on fresh selection seeds (:mod:`rtaw_marl.training.selection`), which picks
+            among them without the first stage's winner's curse. 1: ``best.pt`` alone.
     """
 
     every_frames: int = 204_800
     seeds: list[int] = field(default_factory=lambda: list(range(1000, 1010)))
+    keep: int = 1
 
     def __post_init__(self) -> None:
         check_fields(self, "eval.")
-        at_least(self, "eval.", 1, "every_frames")
+        at_least(self, "eval.", 1, "every_frames", "keep")
         if not self.seeds:
             raise ConfigError("eval.seeds must name at least one seed")
         low = [s for s in seed_list(self.seeds, "eval.seeds") if s < SELECTION_SEEDS]

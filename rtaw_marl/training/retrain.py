@@ -29,6 +29,7 @@ __all__ = [
     "SHIPPED",
     "check_bases",
     "phases",
+    "reselect",
     "select",
     "ship",
     "summary",
@@ -111,7 +112,38 @@ def train_entry(
     log.parent.mkdir(parents=True, exist_ok=True)
     with log.open("w") as fh:
         subprocess.run(cmd, check=True, stdout=fh, stderr=subprocess.STDOUT)
+    if ZOO[name].second_stage:
+        return reselect(name, runs, ship_to, curves)
     return ship(name, run_dir, cmd, ship_to, curves)
+
+
+def reselect(
+    name: str,
+    runs: Path = RUNS,
+    ship_to: Path = SHIPPED,
+    curves: Path | None = None,
+    workers: int = 1,
+) -> str:
+    """Run entry ``name``'s second selection stage on its finished run and ship the
+    candidate it picks (the checkpoint records the stage's gains); returns a summary.
+
+    Raises:
+        ConfigError: The entry has no second stage, or its run is missing.
+    """
+    from rtaw_marl.training.selection import run_candidates, second_stage
+
+    entry, run_dir = ZOO[name], runs / name
+    if not entry.second_stage:
+        raise ConfigError(f"zoo entry {name!r} has no second selection stage")
+    candidates = run_candidates(run_dir)
+    first = load_checkpoint(run_dir / "checkpoints" / "best.pt")["config"]["eval"]["seeds"]
+    result = second_stage(candidates, entry.second_stage, first_stage=first, workers=workers)
+    for label, gain in result.gains.items():
+        interval = f"[{gain.pct_low:+.2f}, {gain.pct_high:+.2f}]"
+        print(f"{name} second stage: {label} {gain.pct:+.2f}% {interval} vs "
+              f"{result.reference} (n = {gain.n})", flush=True)  # fmt: skip
+    cmd = train_command(name, run_dir, runs)
+    return ship(name, run_dir, cmd, ship_to, curves, candidates[result.chosen], result.as_dict())
 
 
 def train_entries(
@@ -156,14 +188,22 @@ def sweep_command(names: Sequence[str], launcher: str, settings: Sequence[str] =
 
 
 def ship(
-    name: str, run_dir: Path, cmd: list[str], ship_to: Path = SHIPPED, curves: Path | None = None
+    name: str,
+    run_dir: Path,
+    cmd: list[str],
+    ship_to: Path = SHIPPED,
+    curves: Path | None = None,
+    source: Path | None = None,
+    selection: dict | None = None,
 ) -> str:
-    """Write the best checkpoint of ``run_dir`` to ``<ship_to>/<name>.pt`` (recording
-    ``cmd``) and its training curve to ``<curves>/training_<name>.png``; returns a
-    summary line."""
-    ckpt = load_checkpoint(run_dir / "checkpoints" / "best.pt")
+    """Write the best checkpoint of ``run_dir`` (or ``source``, a second stage's pick,
+    recording ``selection``) to ``<ship_to>/<name>.pt`` (recording ``cmd``) and its
+    training curve to ``<curves>/training_<name>.png``; returns a summary line."""
+    ckpt = load_checkpoint(source or run_dir / "checkpoints" / "best.pt")
     ckpt.pop("optimizer", None)
     ckpt["command"] = cmd
+    if selection is not None:
+        ckpt["selection"] = selection
     payload = {k: v for k, v in ckpt.items() if k not in ("format", "features", "versions")}
     out = save_checkpoint(ship_to / f"{name}.pt", payload)
     curve = run_dir / "training_curve.png"

@@ -89,6 +89,14 @@ GENERALIST_KEYS = (
     "collector.envs_per_worker=32",
     "torch_threads=2",
 )
+#: The generalist's second selection stage: four members of its mix (small and large
+#: fleets, queues 5 and 10, both modes, four layouts), on seeds 1100-1139.
+GENERALIST_SECOND_STAGE = (
+    "A_astar_m100:m200:paper",
+    "C_astar_m10:paper",
+    "E_astar_m100:n5",
+    "D_astar_m10:m50",
+)
 #: The kinds of entries.
 STAGES = ("train", "continued", "curriculum", "generalist")
 
@@ -111,6 +119,10 @@ class Recipe:
         mix: A generalist's training mix (:mod:`rtaw_marl.scenarios.mix`); its
             :attr:`scenario` (with :attr:`env`) then only selects the checkpoints, and
             its actor starts from :attr:`base`'s (``init_actor``).
+        second_stage: Settings (mix member names) of a second selection stage on fresh
+            selection seeds (:mod:`rtaw_marl.training.selection`): the shipped
+            checkpoint is the run's candidate that gains most there, not the first
+            stage's best. Empty: ``best.pt``.
     """
 
     name: str
@@ -123,6 +135,7 @@ class Recipe:
     base_frames: int = 0
     seed: int = 0
     mix: tuple[str, ...] = ()
+    second_stage: tuple[str, ...] = ()
 
     def setting(self) -> Scenario:
         """The scenario it trains on (with :attr:`env`'s changes)."""
@@ -203,7 +216,7 @@ def _recipes() -> list[Recipe]:
             name="generalist_plus", scenario="A_astar_m100",
             env={"num_robots": 200, "episode_mode": "paper"}, model="rtaw_plus",
             frames=GENERALIST_FRAMES, stage="generalist", base="C_astar_m100_long_plus",
-            mix=GENERALIST,
+            mix=GENERALIST, second_stage=GENERALIST_SECOND_STAGE,
         )
     )  # fmt: skip
     return out
