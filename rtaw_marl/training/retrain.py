@@ -13,6 +13,7 @@ base's run (trained in the same call, or before). :func:`sweep_command` runs the
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 from collections.abc import Iterable, Sequence
@@ -23,6 +24,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.policies.pretrained.registry import SHIPPED
 from rtaw_marl.training.zoo import RUNS, ZOO, recipe, rtaw_train, train_command
+from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = [
     "LAUNCHERS",
@@ -139,9 +141,13 @@ def reselect(
     first = load_checkpoint(run_dir / "checkpoints" / "best.pt")["config"]["eval"]["seeds"]
     result = second_stage(candidates, entry.second_stage, first_stage=first, workers=workers)
     for label, gain in result.gains.items():
-        interval = f"[{gain.pct_low:+.2f}, {gain.pct_high:+.2f}]"
-        print(f"{name} second stage: {label} {gain.pct:+.2f}% {interval} vs "
+        # A pooled difference is in percent already (its mean, low and high).
+        interval = f"[{gain.low:+.2f}, {gain.high:+.2f}]"
+        print(f"{name} second stage: {label} {gain.mean:+.2f}% {interval} vs "
               f"{result.reference} (n = {gain.n})", flush=True)  # fmt: skip
+    record = {**result.as_dict(), "ttd": result.ttd}
+    text = json.dumps(record, indent=1).encode()
+    atomic_write(run_dir / "second_stage.json", lambda fh: fh.write(text))
     cmd = train_command(name, run_dir, runs)
     return ship(name, run_dir, cmd, ship_to, curves, candidates[result.chosen], result.as_dict())
 

@@ -41,7 +41,9 @@ class StageResult:
 
     Attributes:
         gains: Per candidate, the paired TTD gain over the reference pooled over the
-            settings (percent of each setting's reference mean; ``n`` counts episodes).
+            settings: ``mean``, ``low`` and ``high`` in percent of each setting's
+            reference mean (:func:`~rtaw_marl.evaluation.stats.pooled_difference`;
+            ``n`` counts episodes).
         chosen: The candidate with the largest mean gain (ties: the first listed).
         reference: The rule compared with.
         settings: The settings (mix member names) played.
@@ -63,7 +65,8 @@ class StageResult:
             "reference": self.reference,
             "settings": list(self.settings),
             "seeds": [self.seeds[0], self.seeds[-1] + 1],
-            "gains_pct": {name: [g.pct, g.pct_low, g.pct_high] for name, g in self.gains.items()},
+            # A pooled difference is in percent already: its mean, low and high.
+            "gains_pct": {name: [g.mean, g.low, g.high] for name, g in self.gains.items()},
         }
 
 
