@@ -11,9 +11,11 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.layout import MAX_COORDINATE
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
-__all__ = ["EPISODE_MODES", "REWARDS", "SimBuffers", "SimConfig"]
+__all__ = ["EPISODE_MODES", "REFILLS", "REWARDS", "SimBuffers", "SimConfig"]
 
-EPISODE_MODES = ("drain", "paper")
+EPISODE_MODES = ("drain", "paper", "horizon")
+#: When an emptied queue slot takes the next task of the stream.
+REFILLS = ("assign", "finish")
 #: Reward = minus this quantity of the chosen task (the paper's reward ablation).
 REWARDS = ("ttd", "length", "ttd_length")
 
@@ -24,9 +26,19 @@ class SimConfig:
 
     Attributes:
         num_robots: ``M``, at least 1.
-        num_tasks: Tasks served (``drain``) or decisions taken (``paper``) per episode.
+        num_tasks: Tasks served (``drain``) or decisions taken (``paper``) per episode;
+            with ``horizon``, the most tasks the stream holds (the episode ends sooner
+            if they are all assigned).
         queue_len: ``N``, the number of visible queued tasks, at least 1.
-        episode_mode: ``"drain"`` or ``"paper"``.
+        episode_mode: ``"drain"``, ``"paper"`` or ``"horizon"``: decisions until the
+            timestep ``horizon`` (throughput: the tasks finished by then).
+        horizon: The last timestep of a ``horizon`` episode (required there, unused
+            otherwise).
+        refill: ``"assign"`` (default): a slot takes the next task when its task is
+            assigned, so the queue always shows ``N`` unassigned tasks. ``"finish"``:
+            when its task is finished (LoRR's reveal window: ``N`` counts the tasks
+            revealed and not finished, assigned ones included); the freed robot's
+            slot is refilled just before its next decision. Needs ``N > M``.
         noise_mean: Mean of the Gaussian noise added to completion times (seconds),
             at least 0: a delay on top of the travel time (single draws below 0 end a
             task no earlier than its decision).
@@ -41,6 +53,8 @@ class SimConfig:
     num_tasks: int = 500
     queue_len: int = 10
     episode_mode: str = "drain"
+    horizon: int | None = None
+    refill: str = "assign"
     noise_mean: float = 0.25
     noise_var: float = 0.25
     reward: str = "ttd"
@@ -54,6 +68,19 @@ class SimConfig:
             raise ConfigError(
                 f"env.episode_mode must be one of {', '.join(EPISODE_MODES)}, "
                 f"got {self.episode_mode!r}"
+            )
+        if self.refill not in REFILLS:
+            raise ConfigError(
+                f"env.refill must be one of {', '.join(REFILLS)}, got {self.refill!r}"
+            )
+        if self.episode_mode == "horizon" and self.horizon is None:
+            raise ConfigError("env.episode_mode=horizon needs env.horizon=T (timesteps)")
+        if self.horizon is not None:
+            at_least(self, "env.", 1, "horizon")
+        if self.refill == "finish" and self.queue_len <= self.num_robots:
+            raise ConfigError(
+                f"env.refill=finish needs env.queue_len > env.num_robots (the revealed "
+                f"tasks include the M in progress), got {self.queue_len} <= {self.num_robots}"
             )
         if self.reward not in REWARDS:
             raise ConfigError(

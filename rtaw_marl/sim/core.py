@@ -121,6 +121,8 @@ class WarehouseSim:
                 f"env.num_robots={config.num_robots} exceeds the {len(layout.main_cells)} free "
                 f"cells of layout {layout.name!r}"
             )
+        if tasks.refill_same_slot and config.refill == "finish":
+            raise ConfigError("env.refill=finish cannot refill a slot with its own task")
         if tasks.refill_same_slot and tasks.max_tasks is None:
             fixed = getattr(tasks, "tasks", None)
             if fixed is not None and len(fixed) != config.queue_len:
@@ -135,6 +137,8 @@ class WarehouseSim:
         self.num_robots = config.num_robots
         self.queue_len = config.queue_len
         self._paper = config.episode_mode == "paper"
+        self._horizon = config.horizon if config.episode_mode == "horizon" else None
+        self._refill_on_finish = config.refill == "finish"
         self._num_decisions = config.num_tasks
         self._reward_code = REWARDS.index(config.reward)
         self._slots = navigator.target_slots(config.queue_len)
@@ -199,6 +203,7 @@ class WarehouseSim:
             robot_free_at=self.robot_free_at,
         )
         self._executor.reset(starts, records, noise_rng)
+        self._owed = np.zeros(m, dtype=bool)
         self.decisions = 0
         self.done = False
         self.truncated = False
@@ -311,7 +316,12 @@ class WarehouseSim:
         self.robot_xy[robot] = self.queue_rows[slot, 2:]
         # Busy from assignment until free again (noise included), so idle >= 0.
         self.robot_busy[robot] += finish - now
-        self._refill(slot, task, now)
+        if self._refill_on_finish:
+            # LoRR's window: the task stays revealed until it is finished.
+            self._empty(slot)
+            self._owed[robot] = True
+        else:
+            self._refill(slot, task, now)
 
         self.decisions += 1
         self.last_ttd = ttd
@@ -329,13 +339,16 @@ class WarehouseSim:
             return -length
         return -(ttd + length)
 
+    def _empty(self, slot: int) -> None:
+        self.queue_ids[slot] = -1
+        self.queue_mask[slot] = False
+        self.queue_rows[slot] = 0
+        self.queue_length[slot] = 0.0
+
     def _refill(self, slot: int, task: int, now: float) -> None:
         new = self._next_task
         if new >= len(self.tasks):
-            self.queue_ids[slot] = -1
-            self.queue_mask[slot] = False
-            self.queue_rows[slot] = 0
-            self.queue_length[slot] = 0.0
+            self._empty(slot)
             return
         if self.stream.refill_same_slot:
             # The slot keeps its task: the paper's two-task queue always holds both tasks.
@@ -358,6 +371,17 @@ class WarehouseSim:
     def _select_next_robot(self, now: float) -> None:
         self.robot, self.time = self._executor.next_robot(now)
         self._dist = None
+        if self._horizon is not None and self.time >= self._horizon:
+            # The fixed horizon is reached before this robot's decision: the episode ends.
+            self.done = self.truncated = True
+            self._executor.finish_at(self._horizon)
+            return
+        if self._refill_on_finish and self._owed[self.robot]:
+            # The robot's last task is finished now: one more task is revealed.
+            self._owed[self.robot] = False
+            empty = np.flatnonzero(~self.queue_mask)
+            if len(empty):
+                self._refill(int(empty[0]), -1, self.time)
 
     @property
     def executor(self) -> Executor:
@@ -429,4 +453,5 @@ class WarehouseSim:
             self.task_finished,
             self.robot_busy,
             self.decisions,
+            self._horizon,
         )

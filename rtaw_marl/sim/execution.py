@@ -152,6 +152,12 @@ class Executor(ABC):
         """The last decision was taken at ``now``: complete every assigned task and write
         the executed times into the records."""
 
+    def finish_at(self, horizon: int) -> None:
+        """A fixed-horizon episode ends at ``horizon`` (``episode_mode=horizon``): by
+        default every assigned task is still completed (:meth:`finish`); the metrics
+        count the tasks finished by the horizon."""
+        self.finish(horizon)
+
     @abstractmethod
     def schedule(self) -> Schedule:
         """The executed episode (every robot's cell at every second).

@@ -26,6 +26,9 @@ class EpisodeMetrics:
         wait_max: Longest such wait (starvation shows here).
         tasks_served: Number of tasks assigned during the episode.
         decisions: Number of decisions taken.
+        tasks_finished: Tasks delivered (by the horizon in ``horizon`` episodes, where
+            the TTD of a task not yet picked up counts until the horizon; otherwise
+            every served task).
     """
 
     ttd: float
@@ -37,6 +40,7 @@ class EpisodeMetrics:
     wait_max: float
     tasks_served: int
     decisions: int
+    tasks_finished: int = 0
 
     def as_dict(self) -> dict[str, float | int]:
         """The metrics as a plain JSON-ready dict."""
@@ -52,6 +56,7 @@ def compute_metrics(
     finished: np.ndarray,
     robot_busy: np.ndarray,
     decisions: int,
+    horizon: int | None = None,
 ) -> tuple[EpisodeMetrics, np.ndarray]:
     """Aggregate per-task records into :class:`EpisodeMetrics`.
 
@@ -65,6 +70,7 @@ def compute_metrics(
         robot_busy: ``float [M]`` total time each robot spent on tasks, from assignment
             until it was free again.
         decisions: Number of decisions taken.
+        horizon: The last timestep of a ``horizon`` episode, else ``None``.
 
     Returns:
         The metrics and the per-robot idle times ``float [M]``.
@@ -72,8 +78,17 @@ def compute_metrics(
     if not served.any():
         idle = np.zeros_like(robot_busy)
         return EpisodeMetrics(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, decisions), idle
-    makespan = float(finished[served].max())
+    if horizon is not None:
+        # Censored at the horizon: what happens after it is not part of the episode.
+        ttd = np.where(served, np.minimum(ttd, horizon - assigned), ttd)
+        done = served & (finished <= horizon)
+    else:
+        done = served
+    makespan = float(finished[done].max()) if done.any() else 0.0
     idle = makespan - robot_busy
+    if horizon is not None:
+        makespan = float(horizon)
+        idle = np.maximum(horizon - robot_busy, 0.0)
     wait = assigned[served] + ttd[served] - arrival[served]
     metrics = EpisodeMetrics(
         ttd=float(ttd[served].sum()),
@@ -85,5 +100,6 @@ def compute_metrics(
         wait_max=float(wait.max()),
         tasks_served=int(served.sum()),
         decisions=decisions,
+        tasks_finished=int(done.sum()),
     )
     return metrics, idle

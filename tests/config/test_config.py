@@ -112,7 +112,7 @@ def test_wrong_type_is_one_line(cli) -> None:
 def test_compose_errors_are_config_errors() -> None:
     with pytest.raises(ConfigError, match=r"unknown config key 'algo\.lrr'"):
         to_typed(compose("train", ["+algo.lrr=1"]))
-    with pytest.raises(ConfigError, match="available: astar, cbs, direct, sipp"):
+    with pytest.raises(ConfigError, match="available: astar, cbs, direct, pibt, sipp"):
         compose("train", ["navigator=dijkstra"])
 
 

@@ -238,7 +238,7 @@ def test_make_navigator() -> None:
     assert isinstance(navigator_option("direct").distance_model(layout), EuclideanDistance)
     assert navigator_option("direct").distance_model(layout).layout is layout
     with pytest.raises(
-        ConfigError, match=r"unknown navigator 'dijkstra'.*astar, cbs, direct, sipp"
+        ConfigError, match=r"unknown navigator 'dijkstra'.*astar, cbs, direct, pibt, sipp"
     ):
         navigator_option("dijkstra").distance_model(layout)
 

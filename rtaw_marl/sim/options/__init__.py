@@ -36,6 +36,7 @@ from rtaw_marl.sim.options.navigators import (
     CBSConfig,
     DirectConfig,
     NavigatorOption,
+    PIBTConfig,
     SIPPConfig,
 )
 from rtaw_marl.sim.options.tasks import (
@@ -70,6 +71,7 @@ __all__ = [
     "NavigatorOption",
     "OpenLayoutConfig",
     "Option",
+    "PIBTConfig",
     "PocTasksConfig",
     "PresetLayoutConfig",
     "RandomTasksConfig",

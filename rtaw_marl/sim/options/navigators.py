@@ -13,6 +13,7 @@ from rtaw_marl.sim.distances import DistanceModel, EuclideanDistance, GridDistan
 from rtaw_marl.sim.execution import Executor
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf import CBSExecutor, SIPPExecutor
+from rtaw_marl.sim.mapf.pibt import PIBTExecutor
 from rtaw_marl.sim.options.base import Option
 
 __all__ = [
@@ -21,6 +22,7 @@ __all__ = [
     "CBSConfig",
     "DirectConfig",
     "NavigatorOption",
+    "PIBTConfig",
     "SIPPConfig",
 ]
 
@@ -117,6 +119,33 @@ class CBSConfig(NavigatorOption):
         return CBSExecutor(time_limit=self.time_limit, max_nodes=self.max_nodes)
 
 
+@dataclass(kw_only=True)
+class PIBTConfig(NavigatorOption):
+    """Collision-aware for any fleet size: lifelong PIBT moves every robot one cell per
+    timestep (:mod:`rtaw_marl.sim.mapf.pibt`); the policy observes A* distances.
+
+    Attributes:
+        stall_limit: Timesteps without any robot reaching a goal before the episode
+            stops with an error (a deadlock or livelock).
+        record: Keep every robot's cell at every timestep, for the conflict checker and
+            the renderer (``4 M`` bytes per timestep).
+    """
+
+    name: str = "pibt"
+    collision_aware: ClassVar[bool] = True
+    # Tasks are timed by the executed moves in whole seconds: no completion noise.
+    env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
+    stall_limit: int = 10_000
+    record: bool = True
+
+    def __post_init__(self) -> None:
+        _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
+        super().__post_init__()
+
+    def executor(self) -> Executor:
+        return PIBTExecutor(stall_limit=self.stall_limit, record=self.record)
+
+
 def _check_positive(key: str, value: object, what: str, kind: type) -> None:
     numeric = (int,) if kind is int else (int, float)
     ok = isinstance(value, numeric) and not isinstance(value, bool)
@@ -126,5 +155,5 @@ def _check_positive(key: str, value: object, what: str, kind: type) -> None:
 
 NAVIGATORS: dict[str, type[NavigatorOption]] = {
     cls.__dataclass_fields__["name"].default: cls
-    for cls in (DirectConfig, AStarConfig, SIPPConfig, CBSConfig)
+    for cls in (DirectConfig, AStarConfig, SIPPConfig, CBSConfig, PIBTConfig)
 }
