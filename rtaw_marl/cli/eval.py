@@ -50,6 +50,7 @@ from rtaw_marl.evaluation.journal import (
 )
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
+from rtaw_marl.evaluation.throughput import throughput_table
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import seed_list
@@ -115,6 +116,12 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
         journal.close()
     bound, bound_time = _lower_bound(cfg, sim, seeds, results)
     print(format_table(results, REFERENCE, lower_bound=bound, compare_to=cfg.compare_to))
+    if sim.config.episode_mode == "horizon":
+        print(
+            throughput_table(
+                results, sim.num_robots, int(sim.config.horizon or 0), (REFERENCE, cfg.compare_to)
+            )
+        )
     payload = {
         "config": as_plain(cfg),
         "seeds": seeds,

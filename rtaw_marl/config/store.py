@@ -19,6 +19,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, StudyConfig
 from rtaw_marl.models.config import MODELS
+from rtaw_marl.scenarios.lorr import lorr_value
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
@@ -61,6 +62,9 @@ def register_configs() -> None:
     # joblib sweep (other processes) agree with the folder their parent made.
     if not OmegaConf.has_resolver("run_id"):
         OmegaConf.register_new_resolver("run_id", _run_id, use_cache=True)
+    # scenario=lorr: the robots, window and pool of a LoRR problem (scenarios.lorr).
+    if not OmegaConf.has_resolver("lorr"):
+        OmegaConf.register_new_resolver("lorr", lorr_value)
     store = ConfigStore.instance()
     for group, options in GROUPS.items():
         for name, schema in options.items():

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.policies.base import Policy, simulator_of
 from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, RandomPolicy
+from rtaw_marl.policies.batch import BatchAssignment
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.policies.hindsight import Hindsight
 from rtaw_marl.policies.lookahead import Hungarian, Lookahead
@@ -28,6 +29,7 @@ __all__ = [
     "RBTS",
     "BaselinePolicy",
     "BaselinesConfig",
+    "BatchAssignment",
     "Hindsight",
     "Hungarian",
     "Lookahead",
@@ -47,6 +49,9 @@ BASELINES: dict[str, _Factory] = {
     RandomPolicy.name: lambda nav, scale, _: RandomPolicy(nav, scale),
     Lookahead.name: lambda nav, scale, p: Lookahead(nav, scale, horizon=p.lookahead_horizon),
     Hungarian.name: lambda nav, scale, _: Hungarian(nav, scale),
+    BatchAssignment.name: lambda nav, scale, p: BatchAssignment(
+        nav, scale, region=p.batch_region, cap=p.batch_cap, penalty=p.batch_penalty
+    ),
     Hindsight.name: lambda nav, scale, p: Hindsight(p.hindsight_horizon),
 }
 
@@ -65,7 +70,8 @@ def make_baseline(
     """Build the rule registered as ``name``.
 
     Args:
-        name: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian`` or ``hindsight``.
+        name: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``, ``batch``
+            or ``hindsight``.
         navigator: The env's navigator (needed by rules acting on observations).
         scale: The observation length scale.
         params: Rule parameters (horizons); the defaults when ``None``.

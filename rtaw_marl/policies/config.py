@@ -17,16 +17,27 @@ class BaselinesConfig:
     Attributes:
         lookahead_horizon: MPDM decisions ``lookahead`` simulates after its own choice on
             the current queue (0: MPDM itself).
+        batch_region: Side (cells) of a pickup region of the ``batch`` rule.
+        batch_cap: Robots heading to one region before ``batch`` adds its penalty to
+            the region's tasks.
+        batch_penalty: That penalty, in cells of travel.
         hindsight_horizon: Decisions of the ``hindsight`` reference's MPDM rollout over
             the real future (tasks, refills and noise).
     """
 
     lookahead_horizon: int = 3
     hindsight_horizon: int = 30
+    batch_region: int = 8
+    batch_cap: int = 4
+    batch_penalty: float = 20.0
 
     def __post_init__(self) -> None:
         check_fields(self, "baselines.")
-        for key, low in (("lookahead_horizon", 0), ("hindsight_horizon", 0)):
+        keys = (("lookahead_horizon", 0), ("hindsight_horizon", 0), ("batch_region", 1),
+                ("batch_cap", 1))  # fmt: skip
+        for key, low in keys:
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f"baselines.{key} must be an integer >= {low}, got {value!r}")
+        if not self.batch_penalty >= 0:
+            raise ConfigError(f"baselines.batch_penalty must be >= 0, got {self.batch_penalty!r}")

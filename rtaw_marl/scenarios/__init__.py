@@ -10,6 +10,8 @@ seeds and the shipped learned policies that belong to it. The same name works ev
   scenario=C_astar_m10`` (``conf/scenario/<name>.yaml``, generated from this registry), and
   ``rtaw-eval row=C`` (a Table I row: the scenario and its shipped policies,
   ``conf/row/<row>.yaml``, generated as well);
+* LoRR 2024 problem files: ``lorr_scenario(path)`` and ``rtaw-eval scenario=lorr
+  tasks.problem=PATH`` (:mod:`rtaw_marl.scenarios.lorr`);
 * the studies of :mod:`rtaw_marl.evaluation.studies`, which produce docs/results.md.
 
 ``tests/scenarios/test_scenarios.py`` fails when a generated YAML file drifts from this
@@ -19,6 +21,7 @@ This package is plain Python over :mod:`rtaw_marl.sim` (no torch, no Hydra).
 
 from __future__ import annotations
 
+from rtaw_marl.scenarios.lorr import lorr_scenario
 from rtaw_marl.scenarios.registry import (
     EVAL_SEEDS,
     ROWS,
@@ -28,4 +31,12 @@ from rtaw_marl.scenarios.registry import (
     scenario,
 )
 
-__all__ = ["EVAL_SEEDS", "ROWS", "SCENARIOS", "TABLE1_ROBOTS", "Scenario", "scenario"]
+__all__ = [
+    "EVAL_SEEDS",
+    "ROWS",
+    "SCENARIOS",
+    "TABLE1_ROBOTS",
+    "Scenario",
+    "lorr_scenario",
+    "scenario",
+]

@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from rtaw_marl.scenarios.lorr import lorr_yaml
 from rtaw_marl.scenarios.registry import ROWS, SCENARIOS, Scenario
 from rtaw_marl.utils.atomic import atomic_write
 
@@ -71,6 +72,7 @@ def expected_files(conf_dir: Path = CONF_DIR) -> dict[Path, str]:
         conf_dir / "scenario" / f"{name}.yaml": scenario_yaml(s) for name, s in SCENARIOS.items()
     }
     files.update({conf_dir / "row" / f"{row}.yaml": row_yaml(row) for row in ROWS})
+    files[conf_dir / "scenario" / "lorr.yaml"] = lorr_yaml()
     return files
 
 

@@ -23,6 +23,7 @@ import os
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.distances import SLOT_FIELDS_BYTES
 
 __all__ = ["check_memory", "estimate_bytes", "memory_limit"]
 
@@ -36,6 +37,8 @@ _PER_SLOT_CELL = 8
 _PER_TASK = 256
 #: Bytes per queue slot (row, length, id, mask, coordinates) and per robot.
 _PER_SLOT = 80
+#: Bytes per slot of a pool too large for dense fields: its cell and coordinates.
+_PER_SLOT_XY = 24
 _PER_ROBOT = 64
 
 _GIB = 2**30
@@ -55,7 +58,9 @@ def estimate_bytes(env: SimConfig, width: int, height: int, fields: bool) -> int
     padded = (width + 2) * (height + 2)
     tasks = env.num_tasks + (env.queue_len if env.episode_mode == "paper" else 0)
     total = cells * _PER_CELL + tasks * _PER_TASK
-    total += env.queue_len * (_PER_SLOT + (padded * _PER_SLOT_CELL if fields else 0))
+    # Beyond SLOT_FIELDS_BYTES the slots keep cells, not fields (GridDistance.target_slots).
+    dense = fields and env.queue_len * padded * 4 <= SLOT_FIELDS_BYTES
+    total += env.queue_len * (_PER_SLOT + (padded * _PER_SLOT_CELL if dense else _PER_SLOT_XY))
     return total + env.num_robots * _PER_ROBOT
 
 

@@ -221,6 +221,8 @@ class WarehouseSim:
         if self.config.robot_starts is not None:
             starts = np.asarray(self.config.robot_starts, dtype=np.int64)
             self.layout.check_cells(starts, "start of robot")
+        elif (given := self.stream.starts(start_rng, self.layout, self.num_robots)) is not None:
+            starts = np.asarray(given, dtype=np.int64)
         else:
             cells = self.layout.main_cells
             starts = cells[start_rng.choice(len(cells), size=self.num_robots, replace=False)]
@@ -250,6 +252,12 @@ class WarehouseSim:
         """Distances ``float64 [M, N]`` from every robot's cell to each queued origin
         (``[M, K]`` to the origins of ``slots int [K]`` only, when given)."""
         return self._slots.distances_from(self.robot_xy, slots)
+
+    def robot_distances_many(self, robots: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """Distances ``float64 [R, K]`` from the cells of ``robots int [R]`` to the
+        origins of ``slots int [K]`` (a few robots against a large pool: the fields of
+        the robots' cells, not of every slot, when the slots keep cells)."""
+        return self._slots.distances_from(self.robot_xy[np.asarray(robots)], slots)
 
     def chain_distances(self) -> np.ndarray:
         """Distances ``float64 [N, N]`` from each queued destination (rows) to each queued
@@ -327,9 +335,12 @@ class WarehouseSim:
         self.last_ttd = ttd
         if self.decisions >= self._num_decisions:
             self.done = True
-            self.truncated = self._paper
+            self.truncated = self._paper or self._horizon is not None
             self._dist = None  # the acting robot has moved: its cached distances are stale
-            self._executor.finish(now)
+            if self._horizon is not None:
+                self._executor.finish_at(self._horizon)  # the stream ran out before T
+            else:
+                self._executor.finish(now)
         else:
             self._select_next_robot(now)
 

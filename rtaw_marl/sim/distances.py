@@ -37,7 +37,16 @@ from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim._bfs import bfs_fields
 from rtaw_marl.sim.layout import Layout
 
-__all__ = ["DistanceModel", "EuclideanDistance", "GridDistance", "TargetSlots"]
+__all__ = [
+    "SLOT_FIELDS_BYTES",
+    "DistanceModel",
+    "EuclideanDistance",
+    "GridDistance",
+    "TargetSlots",
+]
+
+#: Largest dense copy of the queue slots' distance fields (``N x cells x 4`` bytes).
+SLOT_FIELDS_BYTES = 256 * 2**20
 
 
 class TargetSlots(ABC):
@@ -234,7 +243,13 @@ class GridDistance(DistanceModel):
         return d
 
     def target_slots(self, size: int) -> TargetSlots:
-        return _FieldSlots(self, size)
+        # A dense copy of every slot's field makes MPDM's query one gather, but LoRR's
+        # pools (15,000 slots on a 500x140 map) would take gigabytes: beyond
+        # SLOT_FIELDS_BYTES the slots keep their cells and a query gathers from the
+        # fields of whichever side is smaller (distances are symmetric).
+        if size * self._free_padded.size * 4 <= SLOT_FIELDS_BYTES:
+            return _FieldSlots(self, size)
+        return _CellSlots(self, size)
 
     def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
         field = self.field(*b)
@@ -305,6 +320,41 @@ class _FieldSlots(TargetSlots):
 
     def distance_to(self, slot: int, x: int, y: int) -> float:
         d = int(self._fields[slot, (y + 1) * self._nav._wp + x + 1])
+        if d < 0:
+            raise LayoutError(
+                f"no path from (x={x}, y={y}) to a queued task origin on layout "
+                f"{self._nav.layout.name!r}"
+            )
+        return float(d)
+
+
+class _CellSlots(TargetSlots):
+    """Slot targets as cells only; a query computes (or takes from the navigator's
+    cache) the fields of its smaller side: the ``P`` sources, or the ``K`` targets."""
+
+    def __init__(self, navigator: GridDistance, size: int) -> None:
+        super().__init__(size)
+        self._nav = navigator
+        self._cells = np.zeros(size, dtype=np.int64)  # padded index of each target
+        self._xy = np.zeros((size, 2), dtype=np.int64)
+
+    def set(self, slot: int, x: int, y: int) -> None:
+        self._cells[slot] = (y + 1) * self._nav._wp + x + 1
+        self._xy[slot] = (x, y)
+
+    def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
+        xy = np.asarray(xy, dtype=np.int64).reshape(-1, 2)
+        chosen = slice(None) if slots is None else np.asarray(slots)
+        cells, targets = self._cells[chosen], self._xy[chosen]
+        if len(xy) <= len(cells):
+            return self._nav.fields(xy)[:, cells].astype(np.float64)
+        return self._nav.fields(targets)[:, self._nav._padded_index(xy)].T.astype(np.float64)
+
+    def distances_from_one(self, x: int, y: int) -> np.ndarray:
+        return self._nav.field(x, y)[self._cells].astype(np.float64)
+
+    def distance_to(self, slot: int, x: int, y: int) -> float:
+        d = int(self._nav.field(x, y)[self._cells[slot]])
         if d < 0:
             raise LayoutError(
                 f"no path from (x={x}, y={y}) to a queued task origin on layout "

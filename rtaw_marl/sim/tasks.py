@@ -85,6 +85,12 @@ class TaskStream(ABC):
     def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
         """The first ``count`` tasks, ``int64 [count, 4]`` in arrival order."""
 
+    def starts(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray | None:
+        """The robots' start cells ``int64 [count, 2]`` that come with the stream (a LoRR
+        problem's agent file), or ``None``: random distinct free cells."""
+        del rng, layout, count
+        return None
+
 
 class RandomTasks(TaskStream):
     """Origins and destinations uniform over the main connected region, origin != destination."""

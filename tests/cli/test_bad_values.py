@@ -142,7 +142,7 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("train", ["algo.normalize_advantage=1"], "algo.normalize_advantage must be true or false"),
     # Sizes nothing could hold: refused up front with the estimate.
     ("eval", ["env.num_tasks=1000000000000"], "this simulator needs ~232.8 TiB of memory"),
-    ("eval", ["env.queue_len=100000000", "navigator=astar"], "needs ~114.7 GiB of memory"),
+    ("eval", ["env.queue_len=1000000000", "navigator=astar"], "needs ~96.9 GiB of memory"),
     ("eval", ["layout.width=100000", "layout.height=100000"], "layout open 100000x100000"),
     # Layouts.
     ("eval", _WALLED_RUN, "origin of task 0 at (x=5, y=5) cannot be reached"),

@@ -53,11 +53,30 @@ def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Pat
         overrides += ["layout=A"]
     if (group, option) == ("tasks", "two_task"):
         overrides += ["env.queue_len=2", "layout=open"]
+    if option == "lorr":
+        problem = _tiny_lorr_problem(tmp_path)
+        overrides += {
+            "layout": [f"layout.problem={problem}", "tasks=random", "env.num_robots=2"],
+            "tasks": [f"tasks.problem={problem}", "layout=lorr", f"layout.problem={problem}",
+                      "env.num_robots=2", "env.queue_len=3", "env.refill=finish"],
+            "scenario": [f"tasks.problem={problem}", "env.horizon=20"],
+        }[group]  # fmt: skip
     cfg = _compose(overrides)
     assert cfg[group if group not in GLOBAL_GROUPS else "env"] is not None
     sim = build_sim(typed(cfg).sim_spec())
     sim.reset(0)
     assert not sim.done
+
+
+def _tiny_lorr_problem(root: Path) -> Path:
+    """A LoRR 2024 problem on a 6x3 grid: 2 robots, 3 tasks, a window of 1.5 x 2."""
+    (root / "m.map").write_text("type octile\nheight 3\nwidth 6\nmap\n......\n.@..@.\n......\n")
+    (root / "a.agents").write_text("# version for LoRR 2024\n2\n0\n17\n")
+    (root / "t.tasks").write_text("# version for LoRR 2024\n3\n2,15\n12,5\n9,0\n")
+    keys = {"mapFile": "m.map", "agentFile": "a.agents", "taskFile": "t.tasks",
+            "teamSize": 2, "numTasksReveal": 1.5}  # fmt: skip
+    (root / "p.json").write_text(json.dumps(keys))
+    return root / "p.json"
 
 
 def test_poc_golden_through_cli(tmp_path: Path) -> None:

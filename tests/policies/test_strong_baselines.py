@@ -192,7 +192,15 @@ def test_hindsight_with_collision_aware_execution() -> None:
 
 # ----------------------------------------------------------------- registry
 def test_registry_and_parameters() -> None:
-    assert set(BASELINES) == {"mpdm", "rbts", "random", "lookahead", "hungarian", "hindsight"}
+    assert set(BASELINES) == {
+        "mpdm",
+        "rbts",
+        "random",
+        "lookahead",
+        "hungarian",
+        "batch",
+        "hindsight",
+    }
     params = BaselinesConfig(lookahead_horizon=5, hindsight_horizon=7)
     assert make_baseline("lookahead", params=params).horizon == 5
     assert make_baseline("hindsight", params=params).horizon == 7

@@ -272,3 +272,30 @@ def test_lru_eviction_keeps_answers_right() -> None:
     for k in range(0, len(cells), 17):
         path = nav.path(tuple(cells[k]), tuple(cells[-1 - k]))
         assert len(path) == reference[k, -1 - k] + 1
+
+
+def test_cell_slots_match_dense_field_slots(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Large pools keep cells, not fields (beyond SLOT_FIELDS_BYTES); every query gives
+    the dense copy's distances, from few sources or from many."""
+    from rtaw_marl.sim import distances as dist
+
+    rng = np.random.default_rng(5)
+    layout = Layout(rng.random((20, 30)) < 0.15)
+    cells = layout.main_cells
+    nav = GridDistance(layout)
+    dense = dist._FieldSlots(nav, 40)
+    sparse = dist._CellSlots(nav, 40)
+    for slot, (x, y) in enumerate(cells[rng.choice(len(cells), 40)].tolist()):
+        dense.set(slot, x, y)
+        sparse.set(slot, x, y)
+    few, many = cells[:3], cells[rng.choice(len(cells), 100)]
+    sub = np.array([4, 0, 17])
+    np.testing.assert_array_equal(sparse.distances_from(few), dense.distances_from(few))
+    np.testing.assert_array_equal(sparse.distances_from(many), dense.distances_from(many))
+    np.testing.assert_array_equal(sparse.distances_from(many, sub), dense.distances_from(many, sub))
+    x, y = cells[7]
+    np.testing.assert_array_equal(sparse.distances_from_one(x, y), dense.distances_from_one(x, y))
+    assert sparse.distance_to(3, x, y) == dense.distance_to(3, x, y)
+    assert isinstance(nav.target_slots(40), dist._FieldSlots)
+    monkeypatch.setattr(dist, "SLOT_FIELDS_BYTES", 40 * 32 * 22 * 4 - 1)
+    assert isinstance(nav.target_slots(40), dist._CellSlots)

@@ -248,12 +248,12 @@ def test_make_task_stream_builds_streams(tmp_path: Path) -> None:
     [
         (
             "uniform",
-            "unknown tasks 'uniform'; available: clustered, designated, file, poc, "
+            "unknown tasks 'uniform'; available: clustered, designated, file, lorr, poc, "
             "random, stations, two_task",
         ),
         (
             {"name": "nope"},
-            "available: clustered, designated, file, poc, random, stations, two_task",
+            "available: clustered, designated, file, lorr, poc, random, stations, two_task",
         ),
         ({"sigma": 2.0}, "needs a 'name'"),
         (
@@ -299,12 +299,16 @@ def test_make_layout_builds_layouts(tmp_path: Path) -> None:
     [
         (
             "maze",
-            "unknown layout 'maze'; available: A, B, C, D, E, file, open, preset, shelves, "
+            "unknown layout 'maze'; available: A, B, C, D, E, file, lorr, open, preset, shelves, "
             "warehouse",
             ConfigError,
         ),
         ("file", r"layout=file needs layout\.path=\.\.\.", ConfigError),
-        ({"name": "maze"}, "available: A, B, C, D, E, file, open, preset, shelves", ConfigError),
+        (
+            {"name": "maze"},
+            "available: A, B, C, D, E, file, lorr, open, preset, shelves",
+            ConfigError,
+        ),
         ({"width": 5}, "needs a 'name'", ConfigError),
         (
             {"name": "shelves", "rows": 3},

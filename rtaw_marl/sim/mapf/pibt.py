@@ -27,11 +27,12 @@ from __future__ import annotations
 
 import heapq
 from collections import OrderedDict
+from collections.abc import Callable
 
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError
-from rtaw_marl.sim.distances import DistanceModel
+from rtaw_marl.sim.distances import DistanceModel, GridDistance
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
@@ -46,8 +47,11 @@ class _Fields:
     """BFS fields of goal cells, shared by robots with the same goal and kept (up to a
     capacity) after their last robot leaves, so a popular cell is searched once."""
 
-    def __init__(self, nbr: np.ndarray, capacity: int) -> None:
+    def __init__(
+        self, nbr: np.ndarray, capacity: int, search: Callable[[int, np.ndarray], None]
+    ) -> None:
         self.nbr = nbr
+        self.search = search
         cells = nbr.shape[0]
         # int16 halves the memory of 10,000 fields; a path longer than 32,766 steps on
         # a grid this size is refused rather than wrapped.
@@ -65,7 +69,7 @@ class _Fields:
         slot = self.slot_of.get(cell)
         if slot is None:
             slot = self._new_slot()
-            bfs_compact(self.nbr, cell, self._scratch)
+            self.search(cell, self._scratch)
             self.searches += 1
             self.store[slot] = self._scratch
             self.slot_of[cell] = slot
@@ -101,18 +105,21 @@ class PIBTExecutor(Executor):
     Args:
         stall_limit: Timesteps without any robot reaching a goal before the episode is
             declared deadlocked (:class:`~rtaw_marl.errors.PlanningError`).
+        patience: Timesteps a busy robot may go without getting nearer its goal before
+            it is *stuck*: stuck robots take random priorities each timestep (priority
+            rotation), which breaks the standoffs fixed priorities cannot.
         record: Keep every robot's cell at every timestep (for :meth:`schedule` and the
             conflict checker): ``4 M`` bytes per timestep.
     """
 
     name = "pibt"
 
-    def __init__(self, stall_limit: int = 10_000, record: bool = True) -> None:
-        if isinstance(stall_limit, bool) or not isinstance(stall_limit, int) or stall_limit < 1:
-            raise ConfigError(
-                f"navigator.stall_limit must be a positive integer, got {stall_limit!r}"
-            )
+    def __init__(self, stall_limit: int = 10_000, patience: int = 16, record: bool = True) -> None:
+        for key, value in (("stall_limit", stall_limit), ("patience", patience)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"navigator.{key} must be a positive integer, got {value!r}")
         self.stall_limit = stall_limit
+        self.patience = patience
         self.record = bool(record)
         self._bound = False
 
@@ -121,13 +128,20 @@ class PIBTExecutor(Executor):
         return True
 
     def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
-        del navigator  # robots follow BFS fields; the policy keeps the navigator's distances
         if self._bound:
             raise ConfigError("executor 'pibt' already belongs to a simulator; make one each")
         check_whole_seconds(config, self.name)
         self._bound = True
         self.index, self.cells, self.nbr = compact_graph(layout.obstacles)
+        # The navigator's fields are the same BFS distances: taking them from its cache
+        # shares each search with the policy's queries (a robot's decision is at the
+        # cell whose field it just followed).
+        self._nav = navigator if isinstance(navigator, GridDistance) else None
+        if self._nav is not None:
+            self._padded = self._nav._padded_index(self.cells)
         self.num_robots = config.num_robots
+        # A fixed-horizon episode stops moving at T even when no robot is free then.
+        self.horizon = config.horizon if config.episode_mode == "horizon" else None
 
     def reset(self, starts: np.ndarray, records: EpisodeRecords, rng: np.random.Generator) -> None:
         m = self.num_robots
@@ -136,7 +150,7 @@ class PIBTExecutor(Executor):
         if len(np.unique(self.pos)) < m:
             raise ConfigError("navigator 'pibt' keeps robots on distinct cells: two start together")
         self.rec, self.rng = records, rng
-        self.fields = _Fields(self.nbr, capacity=m + 4096)
+        self.fields = _Fields(self.nbr, capacity=m + 4096, search=self._search)
         self.t = 0
         self.phase = np.zeros(m, dtype=np.int8)
         self.task = np.full(m, -1, dtype=np.int64)
@@ -144,6 +158,9 @@ class PIBTExecutor(Executor):
         self.delivery = np.full(m, -1, dtype=np.int64)
         self.goal_field = np.full(m, -1, dtype=np.int64)
         self.since = np.zeros(m, dtype=np.int64)
+        self.best = np.zeros(m, dtype=np.int64)  # nearest the goal so far
+        self.stuck = np.zeros(m, dtype=np.int64)  # timesteps without getting nearer
+        self.rotations = 0
         self.occ_now = np.full(len(self.cells), -1, dtype=np.int64)
         self.occ_now[self.pos] = np.arange(m)
         self.occ_next = np.full(len(self.cells), -1, dtype=np.int64)
@@ -182,6 +199,8 @@ class PIBTExecutor(Executor):
                 heapq.heappush(self.free, self.waiting.pop(0)[1])
             if self.free:
                 break
+            if self.horizon is not None and self.t >= self.horizon:
+                return 0, float(self.t)  # the simulator ends the episode at T
             events = self._step()
             quiet = 0 if events else quiet + 1
             if quiet > self.stall_limit:
@@ -205,8 +224,11 @@ class PIBTExecutor(Executor):
         self._done = True
 
     def finish_at(self, horizon: int) -> None:
-        """End a fixed-horizon episode at ``horizon``: stop moving; tasks not delivered
-        stay unfinished, and those not picked up count their wait until the horizon."""
+        """End a fixed-horizon episode at ``horizon``: move on without new decisions
+        until then; tasks not delivered stay unfinished, and those not picked up count
+        their wait until the horizon."""
+        while self.t < horizon and (self.phase != _IDLE).any():
+            self._step()
         rec = self.rec
         late = self.task[self.phase == _TO_PICKUP]
         rec.task_ttd[late] = horizon - rec.task_assigned[late]
@@ -225,12 +247,21 @@ class PIBTExecutor(Executor):
             minlength=self.num_robots,
         )
 
+    def _search(self, cell: int, out: np.ndarray) -> None:
+        if self._nav is None:
+            bfs_compact(self.nbr, cell, out)
+        else:
+            x, y = self.cells[cell]
+            out[:] = self._nav.field(int(x), int(y))[self._padded]
+
     def _set_goal(self, robot: int, cell: int) -> None:
         if self.goal_field[robot] >= 0:
             self.fields.release(int(self.goal_field[robot]))
         self.goal[robot] = cell
         self.goal_field[robot] = -1 if cell < 0 else self.fields.acquire(cell)
         self.since[robot] = 0
+        self.stuck[robot] = 0
+        self.best[robot] = 1 << 30
 
     def _picked_up(self, robot: int) -> None:
         task = int(self.task[robot])
@@ -256,7 +287,13 @@ class PIBTExecutor(Executor):
         m = self.num_robots
         busy = self.phase != _IDLE
         # Waiting longest first; idle robots last; ties: the lower id.
-        order = np.lexsort((np.arange(m), ~busy, -self.since))
+        prio = self.since.astype(np.float64)
+        stuck = busy & (self.stuck >= self.patience)
+        if stuck.any():
+            # Priority rotation: a fixed order can hold two robots in a standoff forever.
+            prio[stuck] = self.rng.random(int(stuck.sum())) * (prio.max() + 1.0)
+            self.rotations += 1
+        order = np.lexsort((np.arange(m), ~busy, -prio))
         tie = self.rng.random((m, 5))
         pibt_step(
             self.pos, order, self.goal_field, self.fields.store, self.nbr, tie, self.occ_now,
@@ -266,6 +303,7 @@ class PIBTExecutor(Executor):
         if self.record:
             self.trace.append(self.pos.astype(np.int32))
         self.since[busy] += 1
+        self._progress(busy)
         self.max_stall = max(self.max_stall, int(self.since.max(initial=0)))
         arrived = np.flatnonzero(busy & (self.pos == self.goal))
         for robot in arrived.tolist():
@@ -274,6 +312,14 @@ class PIBTExecutor(Executor):
             else:
                 self._delivered(robot)
         return len(arrived)
+
+    def _progress(self, busy: np.ndarray) -> None:
+        """Count, per busy robot, the timesteps since it last got nearer its goal."""
+        robots = np.flatnonzero(busy)
+        d = self.fields.store[self.goal_field[robots], self.pos[robots]].astype(np.int64)
+        nearer = d < self.best[robots]
+        self.best[robots] = np.minimum(self.best[robots], d)
+        self.stuck[robots] = np.where(nearer, 0, self.stuck[robots] + 1)
 
     def schedule(self) -> Schedule:
         if not self._done:
@@ -299,4 +345,5 @@ class PIBTExecutor(Executor):
             "timesteps": float(self.t),
             "field_searches": float(self.fields.searches),
             "max_stall": float(self.max_stall),
+            "rotations": float(self.rotations),
         }

@@ -9,6 +9,7 @@ from typing import ClassVar
 
 from rtaw_marl.errors import ConfigError, LayoutError, unknown_name
 from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
+from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.sim.options.base import Option
 from rtaw_marl.sim.warehouse_layouts import PRESETS, warehouse_grid
 from rtaw_marl.utils.checks import at_least
@@ -18,6 +19,7 @@ __all__ = [
     "FileLayoutConfig",
     "GivenLayout",
     "LayoutOption",
+    "LoRRLayoutConfig",
     "OpenLayoutConfig",
     "PresetLayoutConfig",
     "ShelvesLayoutConfig",
@@ -200,6 +202,23 @@ class FileLayoutConfig(LayoutOption):
 
 
 @dataclass(kw_only=True)
+class LoRRLayoutConfig(LayoutOption):
+    """The map of a League of Robot Runners 2024 problem (:mod:`rtaw_marl.sim.lorr`).
+
+    Attributes:
+        problem: The problem JSON (required; ``scenario=lorr`` takes ``tasks.problem``).
+    """
+
+    name: str = "lorr"
+    problem: str | None = None
+
+    def _generate(self) -> Layout:
+        if self.problem is None:
+            raise ConfigError("layout=lorr needs layout.problem=FILE.json (a LoRR problem)")
+        return read_problem(self.problem).layout()
+
+
+@dataclass(kw_only=True)
 class GivenLayout(LayoutOption):
     """A :class:`Layout` built in Python (not a Hydra option: it is not serializable)."""
 
@@ -218,5 +237,6 @@ LAYOUTS: dict[str, type[LayoutOption]] = {
         WarehouseLayoutConfig,
         PresetLayoutConfig,
         FileLayoutConfig,
+        LoRRLayoutConfig,
     )
 }

@@ -127,6 +127,8 @@ class PIBTConfig(NavigatorOption):
     Attributes:
         stall_limit: Timesteps without any robot reaching a goal before the episode
             stops with an error (a deadlock or livelock).
+        patience: Timesteps a busy robot may go without getting nearer its goal before
+            its priority is drawn at random each timestep (priority rotation).
         record: Keep every robot's cell at every timestep, for the conflict checker and
             the renderer (``4 M`` bytes per timestep).
     """
@@ -136,14 +138,18 @@ class PIBTConfig(NavigatorOption):
     # Tasks are timed by the executed moves in whole seconds: no completion noise.
     env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     stall_limit: int = 10_000
+    patience: int = 16
     record: bool = True
 
     def __post_init__(self) -> None:
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
+        _check_positive("navigator.patience", self.patience, "integer", int)
         super().__post_init__()
 
     def executor(self) -> Executor:
-        return PIBTExecutor(stall_limit=self.stall_limit, record=self.record)
+        return PIBTExecutor(
+            stall_limit=self.stall_limit, patience=self.patience, record=self.record
+        )
 
 
 def _check_positive(key: str, value: object, what: str, kind: type) -> None:

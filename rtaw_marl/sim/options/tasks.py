@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.lorr import LoRRTasks, read_problem
 from rtaw_marl.sim.options.base import Option
 from rtaw_marl.sim.tasks import (
     DEFAULT_CENTRES,
@@ -28,6 +29,7 @@ __all__ = [
     "DesignatedTasksConfig",
     "FileTasksConfig",
     "GivenTasks",
+    "LoRRTasksConfig",
     "PocTasksConfig",
     "RandomTasksConfig",
     "StationTasksConfig",
@@ -139,6 +141,31 @@ class FileTasksConfig(TaskOption):
 
 
 @dataclass(kw_only=True)
+class LoRRTasksConfig(TaskOption):
+    """A League of Robot Runners 2024 problem's tasks (file order, cycled) and start
+    cells (:mod:`rtaw_marl.sim.lorr`); ``scenario=lorr`` sets the rest.
+
+    Attributes:
+        problem: The problem JSON (required).
+        starts: ``file`` (the first ``env.num_robots`` cells of its agent file) or
+            ``random`` (distinct random free cells per seed, for more robots).
+    """
+
+    name: str = "lorr"
+    problem: str | None = None
+    starts: str = "file"
+
+    def __post_init__(self) -> None:
+        if self.starts not in ("file", "random"):
+            raise ConfigError(f"tasks.starts must be one of file, random, got {self.starts!r}")
+
+    def build(self) -> TaskStream:
+        if self.problem is None:
+            raise ConfigError("tasks=lorr needs tasks.problem=FILE.json (a LoRR problem)")
+        return LoRRTasks(read_problem(self.problem), self.starts)
+
+
+@dataclass(kw_only=True)
 class PocTasksConfig(TaskOption):
     """The paper's proof-of-concept list of 5 tasks (appendix)."""
 
@@ -177,6 +204,7 @@ TASK_STREAMS: dict[str, type[TaskOption]] = {
         ClusteredTasksConfig,
         StationTasksConfig,
         FileTasksConfig,
+        LoRRTasksConfig,
         PocTasksConfig,
         TwoTaskConfig,
     )

@@ -1,0 +1,99 @@
+"""League of Robot Runners 2024 problems as scenarios: ``lorr_scenario(path)`` in Python,
+``scenario=lorr tasks.problem=PATH`` on the command line (``conf/scenario/lorr.yaml``,
+generated here).
+
+Both take the problem's map, tasks and start cells, LoRR's reveal window as the queue
+(``env.queue_len = ceil(numTasksReveal x M)``, ``env.refill=finish``), LoRR's
+5,000-timestep horizon and collision-free PIBT execution; ``env.num_robots`` defaults
+to the problem's ``teamSize`` and the window follows it when it is changed. The values
+come from :func:`rtaw_marl.sim.lorr.lorr_env` on both paths.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.scenarios.registry import Scenario
+from rtaw_marl.sim.lorr import LORR_ENV, LoRRProblem, lorr_env, read_problem
+
+__all__ = ["lorr_scenario", "lorr_value", "lorr_yaml"]
+
+_GENERATED = (
+    "# Generated from rtaw_marl.scenarios (python -m rtaw_marl.scenarios.configs); do not edit."
+)
+
+
+def lorr_scenario(
+    problem: str | Path | LoRRProblem,
+    num_robots: int | None = None,
+    starts: str = "file",
+    navigator: str = "pibt",
+    **env: object,
+) -> Scenario:
+    """A LoRR problem as a :class:`~rtaw_marl.scenarios.Scenario`.
+
+    Args:
+        problem: The problem JSON (or one read by :func:`~rtaw_marl.sim.lorr.read_problem`).
+        num_robots: Robots (default: the problem's ``teamSize``).
+        starts: ``file`` or ``random`` start cells (``tasks.starts``).
+        navigator: The navigator (``pibt`` executes collision-free at any fleet size).
+        **env: Further simulator keys (``horizon=1000``), checked by
+            :class:`~rtaw_marl.sim.config.SimConfig`.
+    """
+    if not isinstance(problem, LoRRProblem):
+        problem = read_problem(problem)
+    horizon = int(env.pop("horizon", LORR_ENV["horizon"]))  # type: ignore[call-overload]
+    keys = {**lorr_env(problem, num_robots, horizon), **env}
+    name = f"lorr_{problem.path.stem}"
+    return Scenario(
+        name=name,
+        title=f"LoRR {problem.path.stem}, M={keys['num_robots']}",
+        description=f"LoRR 2024 problem {problem.path.name}",
+        layout={"name": "lorr", "problem": str(problem.path)},
+        navigator=navigator,
+        tasks={"name": "lorr", "problem": str(problem.path), "starts": starts},
+        env=keys,
+    )
+
+
+def lorr_value(
+    key: str, problem: str | None, num_robots: int | None = None, horizon: int | None = None
+) -> int:
+    """One derived key of a problem (the ``${lorr:KEY,PROBLEM,M,T}`` resolver)."""
+    if problem is None or problem == "None":
+        raise ConfigError("scenario=lorr needs tasks.problem=FILE.json (a LoRR 2024 problem)")
+    robots = None if num_robots is None else int(num_robots)
+    t = LORR_ENV["horizon"] if horizon is None else int(horizon)
+    return int(lorr_env(read_problem(problem), robots, t)[key])
+
+
+def lorr_yaml() -> str:
+    """The text of ``conf/scenario/lorr.yaml``."""
+    env = {
+        "num_robots": "${lorr:num_robots,${tasks.problem}}",
+        "queue_len": "${lorr:queue_len,${tasks.problem},${env.num_robots}}",
+        "num_tasks": "${lorr:num_tasks,${tasks.problem},${env.num_robots},${env.horizon}}",
+        **LORR_ENV,
+    }
+    lines = [
+        "# @package _global_",
+        "# A League of Robot Runners 2024 problem: set tasks.problem=FILE.json (its map,",
+        "# tasks, start cells and reveal window; PIBT execution for 5,000 timesteps).",
+        _GENERATED,
+        "defaults:",
+        "  - override /layout: lorr",
+        "  - override /navigator: pibt",
+        "  - override /tasks: lorr",
+        "",
+        "env:",
+        *(f"  {k}: {_quoted(v)}" for k, v in env.items()),
+        "",
+        "layout:",
+        '  problem: "${tasks.problem}"',
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _quoted(value: object) -> str:
+    return f'"{value}"' if isinstance(value, str) and value.startswith("$") else str(value)

@@ -1,0 +1,118 @@
+"""League of Robot Runners 2024 problems: files, errors, the reveal window and PIBT."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rtaw_marl.errors import ConfigError, TaskFileError
+from rtaw_marl.evaluation.evaluate import run_episode
+from rtaw_marl.policies import make_baseline
+from rtaw_marl.scenarios import lorr_scenario
+from rtaw_marl.sim.builder import build_sim
+from rtaw_marl.sim.lorr import LORR_HORIZON, read_agents, read_lorr_tasks, read_problem
+from rtaw_marl.sim.mapf import check_schedule
+
+KIT = Path(__file__).resolve().parents[2].parent / "shared" / "lorr" / "start-kit-v2.1.2"
+RANDOM = KIT / "example_problems" / "random.domain" / "random_32_32_20_100.json"
+
+
+def write_problem(root: Path, tasks: str, agents: str = "# version for LoRR 2024\n2\n0\n7\n",
+                  **keys: object) -> Path:  # fmt: skip
+    """A 4x2 problem: map '....' / '..@.', locations row * 4 + col."""
+    (root / "m.map").write_text("type octile\nheight 2\nwidth 4\nmap\n....\n..@.\n")
+    (root / "a.agents").write_text(agents)
+    (root / "t.tasks").write_text(tasks)
+    data = {"mapFile": "m.map", "agentFile": "a.agents", "taskFile": "t.tasks",
+            "teamSize": 2, "numTasksReveal": 1.5, **keys}  # fmt: skip
+    path = root / "p.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_locations_are_linearized_row_major(tmp_path: Path) -> None:
+    """loc = row * width + col: 7 is (x=3, y=1); tasks keep their errands in order."""
+    problem = read_problem(write_problem(tmp_path, "# version for LoRR 2024\n2\n1,7\n4,0\n"))
+    layout = problem.layout()
+    assert read_agents(problem.agents_path, layout).tolist() == [[0, 0], [3, 1]]
+    assert read_lorr_tasks(problem.tasks_path, layout).tolist() == [[1, 0, 3, 1], [0, 1, 0, 0]]
+    assert (problem.team_size, problem.window(2), problem.window(10)) == (2, 3, 15)
+
+
+@pytest.mark.parametrize(
+    ("tasks", "keys", "message"),
+    [
+        ("1\n1,7,2\n", {}, r"t\.tasks:2: a task has 3 errands; only pickup-then-delivery"),
+        ("2\n1,7\n", {}, r"header says 2 tasks, found 1"),
+        ("1\n1,99\n", {}, r"location 99 is outside the 8-cell map"),
+        ("1\n1,6\n", {}, r"delivery of task 0 at \(x=2, y=1\) is on an obstacle"),
+        ("1\nfoo\n", {}, r"expected comma-separated locations"),
+        ("x\n", {}, r"starts with its count, got 'x'"),
+        ("1\n1,7\n", {"numTasksReveal": 1}, r"numTasksReveal must be a number above 1"),
+        ("1\n1,7\n", {"taskFile": "nope.tasks"}, r"taskFile 'nope\.tasks' not found"),
+    ],
+)
+def test_bad_files_get_one_line_errors(
+    tmp_path: Path, tasks: str, keys: dict, message: str
+) -> None:
+    path = write_problem(tmp_path, tasks, **keys)
+
+    def read() -> None:
+        problem = read_problem(path)
+        read_lorr_tasks(problem.tasks_path, problem.layout())
+
+    with pytest.raises(ConfigError, match=message) as info:
+        read()
+    assert "\n" not in str(info.value)
+
+
+def test_missing_key_and_not_json(tmp_path: Path) -> None:
+    path = tmp_path / "p.json"
+    path.write_text('{"mapFile": "m.map"}')
+    with pytest.raises(TaskFileError, match="misses 'agentFile'"):
+        read_problem(path)
+    path.write_text("type octile")
+    with pytest.raises(TaskFileError, match=r"not a LoRR problem \(JSON\)"):
+        read_problem(path)
+
+
+def test_more_robots_than_the_agent_file_need_random_starts(tmp_path: Path) -> None:
+    path = write_problem(tmp_path, "2\n1,7\n4,0\n")
+    sim = build_sim(lorr_scenario(path, num_robots=3, horizon=20).spec())
+    with pytest.raises(ConfigError, match=r"holds 2 start cells, env\.num_robots=3; use tasks"):
+        sim.reset(0)
+    sim = build_sim(lorr_scenario(path, num_robots=3, starts="random", horizon=20).spec())
+    sim.reset(0)
+    assert len(np.unique(sim.robot_xy, axis=0)) == 3
+
+
+@pytest.fixture
+def kit() -> Path:
+    if not RANDOM.is_file():
+        pytest.skip(f"LoRR start kit not found at {KIT}")
+    return RANDOM
+
+
+def test_start_kit_problem_runs_collision_free_with_the_window(kit: Path) -> None:
+    """The start kit's random 32x32 problem (100 robots): its starts, a window of 150
+    revealed tasks, PIBT without conflicts, tasks finished by the horizon counted."""
+    s = lorr_scenario(kit, horizon=300)
+    assert (s.env["num_robots"], s.env["queue_len"], s.env["horizon"]) == (100, 150, 300)
+    assert lorr_scenario(kit).env["horizon"] == LORR_HORIZON
+    sim = build_sim(s.spec())
+    problem = read_problem(kit)
+    run_episode(sim, make_baseline("mpdm"), seed=0)
+    schedule = sim.schedule()
+    check_schedule(sim.layout, schedule)
+    np.testing.assert_array_equal(
+        schedule.positions[0], read_agents(problem.agents_path, problem.layout())
+    )
+    metrics = sim.metrics()
+    assert metrics.tasks_finished == len(schedule.task_delivered) > 100
+    assert (schedule.task_delivered <= 300).all()
+    # The queue shows file order: the first 150 tasks were revealed at t = 0.
+    first = read_lorr_tasks(problem.tasks_path, problem.layout())[:150]
+    np.testing.assert_array_equal(sim.tasks[:150], first)
