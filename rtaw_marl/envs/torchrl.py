@@ -173,6 +173,11 @@ class BatchedWarehouseEnv(EnvBase):
         done = np.zeros((self.num_envs, 1), dtype=bool)
         truncated = np.zeros((self.num_envs, 1), dtype=bool)
         for i, (sim, slot) in enumerate(zip(self.sims, slots, strict=True)):
+            if sim.done:
+                # An ended episode ignores its action until it is reset, so episodes of
+                # different lengths (horizon episodes) can run in lockstep.
+                reward[i, 0], done[i, 0], truncated[i, 0] = 0.0, True, sim.truncated
+                continue
             try:
                 reward[i, 0] = sim.step(slot)
             except InvalidActionError as exc:
@@ -209,6 +214,7 @@ class BatchedWarehouseEnv(EnvBase):
         slots = action.reshape(self.num_envs).numpy()
         in_range = (slots >= 0) & (slots < self.queue_len)
         legal = in_range & self._mask[np.arange(self.num_envs), np.where(in_range, slots, 0)]
+        legal |= np.array([sim.done for sim in self.sims])  # ignored (see _step)
         if not legal.all():
             i = int(np.flatnonzero(~legal)[0])
             problem = (

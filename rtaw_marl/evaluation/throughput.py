@@ -13,7 +13,7 @@ import numpy as np
 
 from rtaw_marl.evaluation.stats import mean_ci
 
-__all__ = ["finished_diff", "throughput_table"]
+__all__ = ["LORR_PUBLISHED", "finished_diff", "throughput_markdown", "throughput_table"]
 
 Results = Mapping[str, Mapping[str, Sequence[float]]]
 
@@ -83,3 +83,48 @@ def throughput_table(
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(r) + " |" for r in rows]
     return "\n".join([*lines, legend])
+
+
+#: LoRR 2024's published tasks finished on ``warehouse_large`` (5,000 timesteps), by
+#: robots: (the start kit's default: greedy scheduler + PIBT-based planner, the best
+#: entry). Another simulator and planner (headings and turns, its own traffic rules).
+LORR_PUBLISHED: dict[int, tuple[int, int]] = {5000: (67_177, 94_232), 10_000: (63_924, 154_834)}
+
+
+def throughput_markdown(runs: Sequence[tuple[str, Mapping]], reference: str = "mpdm") -> str:
+    """One markdown table of several ``rtaw-eval`` results of horizon episodes.
+
+    Args:
+        runs: ``(setting label, results.json payload)`` pairs.
+        reference: The rule every policy is compared with.
+    """
+    lines = [
+        "| setting | policy | seeds | tasks finished | tasks / robot-hour | vs MPDM "
+        "| ms / timestep |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
+    for label, payload in runs:
+        env = payload["config"]["env"]
+        m, horizon = int(env["num_robots"]), int(env["horizon"])
+        results = payload["policies"]
+        for name, metrics in results.items():
+            done = metrics["tasks_finished"]
+            mean, half = mean_ci(done)
+            versus = "—"
+            if name != reference and reference in results:
+                versus = _cell(finished_diff(results[reference]["tasks_finished"], done))
+            lines.append(
+                f"| {label} | {name} | {len(done)} | {mean:,.0f}"
+                + ("" if half is None else f" ± {half:,.0f}")
+                + f" | {mean / m / (horizon / 3600):.1f} | {versus} | "
+                f"{1000 * np.mean(metrics['wall_time_s']) / horizon:.1f} |"
+            )
+        if m in LORR_PUBLISHED and "warehouse_large" in label:
+            default, best = LORR_PUBLISHED[m]
+            for who, value in (("LoRR 2024 default planner (published)", default),
+                               ("LoRR 2024 best entry (published)", best)):  # fmt: skip
+                lines.append(
+                    f"| {label} | {who} | — | {value:,} | {value / m / (horizon / 3600):.1f} "
+                    "| another planner | — |"
+                )
+    return "\n".join(lines)

@@ -88,7 +88,22 @@ class BatchAssignment(BaselinePolicy):
         super().__init__(None, scale)
         self.region, self.cap, self.penalty = int(region), int(cap), float(penalty)
 
+    def reset(self, seed: int | None = None) -> None:
+        super().reset(seed)
+        self._plan: tuple[int, float, dict[int, int]] | None = None
+
     def act_sim(self, sim: WarehouseSim) -> int:
+        # One matching per timestep: the robots freed in it take their matched tasks
+        # while those are still queued (a later robot re-solves only if one is gone).
+        if self._plan is not None and self._plan[:2] == (id(sim), sim.time):
+            task = self._plan[2].get(sim.robot)
+            if task is not None:
+                slot = np.flatnonzero(sim.queue_ids == task)
+                if slot.size:
+                    return int(slot[0])
+        return self._solve(sim)
+
+    def _solve(self, sim: WarehouseSim) -> int:
         slots = np.flatnonzero(sim.queue_mask)
         free = np.flatnonzero(sim.robot_free_at <= sim.time + 1e-9)
         free = np.union1d(free, [sim.robot])  # the acting robot is free by definition
@@ -101,7 +116,13 @@ class BatchAssignment(BaselinePolicy):
         cost = capped_costs(
             dist, sim.queue_rows[slots, :2], _heading(sim), self.region, self.cap, self.penalty
         )
-        return int(slots[match(cost)[me]])
+        cols = match(cost)
+        self._plan = (
+            id(sim),
+            sim.time,
+            dict(zip(free.tolist(), sim.queue_ids[slots[cols]].tolist(), strict=True)),
+        )
+        return int(slots[cols[me]])
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:
         raise NotImplementedError(

@@ -75,7 +75,8 @@ def greedy_ttd(net: Actor, env: BatchedWarehouseEnv, seeds: list[int]) -> list[f
     while True:
         td["action"] = greedy_action(net, td)
         td = env.step(td)["next"]
-        # Every simulator takes num_tasks decisions, so all finish on the same step.
+        # Ended simulators ignore their actions until all have ended (horizon episodes
+        # end after different numbers of decisions).
         if bool(td["done"].all()):
             break
     return [env.sims[i].metrics().ttd for i in range(len(seeds))]

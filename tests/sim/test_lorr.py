@@ -116,3 +116,41 @@ def test_start_kit_problem_runs_collision_free_with_the_window(kit: Path) -> Non
     # The queue shows file order: the first 150 tasks were revealed at t = 0.
     first = read_lorr_tasks(problem.tasks_path, problem.layout())[:150]
     np.testing.assert_array_equal(sim.tasks[:150], first)
+
+
+def test_priority_rotation_breaks_the_standoffs_of_fixed_priorities(kit: Path) -> None:
+    """The start kit's random map deadlocks with fixed priorities (seed 0: no goal
+    reached for 200 timesteps by t = 508) and runs to the horizon with rotation."""
+    from rtaw_marl.errors import PlanningError
+
+    def play(patience: int) -> object:
+        nav = {"name": "pibt", "stall_limit": 200, "patience": patience, "record": False}
+        sim = build_sim(lorr_scenario(kit, horizon=700, navigator=nav).spec())
+        run_episode(sim, make_baseline("mpdm"), seed=0)
+        return sim
+
+    with pytest.raises(PlanningError, match="no robot reached its goal in 200 timesteps"):
+        play(10**9)
+    sim = play(16)
+    assert sim.metrics().tasks_finished > 2000
+    assert sim.executor.stats()["rotations"] > 0
+
+
+def test_throughput_table_reads_eval_results() -> None:
+    """rtaw-eval's results of horizon episodes become the docs' table, with LoRR's
+    published figures beside warehouse_large at 5,000 robots."""
+    from rtaw_marl.evaluation.throughput import throughput_markdown
+
+    payload = {
+        "config": {"env": {"num_robots": 5000, "horizon": 3600}},
+        "policies": {
+            "mpdm": {"tasks_finished": [100.0, 110.0], "wall_time_s": [36.0, 36.0]},
+            "batch": {"tasks_finished": [110.0, 121.0], "wall_time_s": [72.0, 72.0]},
+        },
+    }
+    table = throughput_markdown([("warehouse_large, M=5,000", payload)])
+    rows = table.splitlines()[2:]
+    assert rows[0].startswith("| warehouse_large, M=5,000 | mpdm | 2 | 105 ± 64 | 0.0 | — | 10.0 |")
+    assert "| batch | 2 | 116 ± 70 | 0.0 | +10.0% [+3.9, +16.1]* | 20.0 |" in rows[1]
+    assert "67,177" in rows[2]
+    assert "94,232" in rows[3]

@@ -9,17 +9,21 @@ default planner builds on, for 10,000 robots.
 Each assigned robot walks to its task's origin, then to its destination, along its
 goal's BFS field; a robot without a task keeps its cell unless pushed. Priorities are
 the timesteps since a robot's goal last changed (ties: the lower id), so a robot that
-is kept waiting gains priority until it moves first: the standard recovery from PIBT's
-livelocks. The TTD of a task is its pickup time minus its assignment time, waits
-included; the robot is free at the delivery time. Decisions are taken when a robot is
-free, in order of robot id within a timestep.
+is kept waiting gains priority until it moves first. A busy robot that has not got
+nearer its goal for ``patience`` timesteps is *stuck* and takes a random priority each
+timestep (priority rotation): fixed priorities can hold two robots in a standoff
+forever where one must back off. The TTD of a task is its pickup time minus its
+assignment time, waits included; the robot is free at the delivery time. Decisions are
+taken when a robot is free, in order of robot id within a timestep.
 
 What is guaranteed: every timestep is free of vertex and swap conflicts (by
 construction, and checked by :func:`~rtaw_marl.sim.mapf.conflicts.check_schedule` on
 every recorded episode). What is not: PIBT reaches every goal only on graphs where
-every pair of adjacent cells lies on a cycle; on maps with dead ends robots can
-livelock. :meth:`PIBTExecutor.stats` reports the longest any robot waited for its goal
-to change (``max_stall``); a timestep limit without any robot reaching a goal raises
+every edge lies on a cycle; elsewhere robots can deadlock or livelock (rotation
+recovers from most standoffs, not from two robots that must pass in a one-wide
+corridor). :meth:`PIBTExecutor.stats` reports the longest any robot waited for its goal
+to change (``max_stall``) and the timesteps with a stuck robot (``rotations``); a
+timestep limit without any robot reaching a goal raises
 :class:`~rtaw_marl.errors.PlanningError` naming it.
 """
 
