@@ -47,7 +47,9 @@ BASELINES: dict[str, _Factory] = {
     MPDM.name: lambda nav, scale, _: MPDM(nav, scale),
     RBTS.name: lambda nav, scale, _: RBTS(nav, scale),
     RandomPolicy.name: lambda nav, scale, _: RandomPolicy(nav, scale),
-    Lookahead.name: lambda nav, scale, p: Lookahead(nav, scale, horizon=p.lookahead_horizon),
+    Lookahead.name: lambda nav, scale, p: Lookahead(
+        nav, scale, horizon=p.lookahead_horizon, candidates=p.lookahead_candidates
+    ),
     Hungarian.name: lambda nav, scale, _: Hungarian(nav, scale),
     BatchAssignment.name: lambda nav, scale, p: BatchAssignment(
         nav, scale, region=p.batch_region, cap=p.batch_cap, penalty=p.batch_penalty

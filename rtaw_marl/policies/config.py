@@ -17,6 +17,8 @@ class BaselinesConfig:
     Attributes:
         lookahead_horizon: MPDM decisions ``lookahead`` simulates after its own choice on
             the current queue (0: MPDM itself).
+        lookahead_candidates: With more queued tasks than this, ``lookahead`` rolls
+            out on the ones nearest the free robot only; ``None``: every queued task.
         batch_region: Side (cells) of a pickup region of the ``batch`` rule.
         batch_cap: Robots heading to one region before ``batch`` adds its penalty to
             the region's tasks.
@@ -26,6 +28,7 @@ class BaselinesConfig:
     """
 
     lookahead_horizon: int = 3
+    lookahead_candidates: int | None = None
     hindsight_horizon: int = 30
     batch_region: int = 8
     batch_cap: int = 4
@@ -39,5 +42,8 @@ class BaselinesConfig:
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f"baselines.{key} must be an integer >= {low}, got {value!r}")
+        k = self.lookahead_candidates
+        if k is not None and (isinstance(k, bool) or not isinstance(k, int) or k < 1):
+            raise ConfigError(f"baselines.lookahead_candidates must be an integer >= 1, got {k!r}")
         if not self.batch_penalty >= 0:
             raise ConfigError(f"baselines.batch_penalty must be >= 0, got {self.batch_penalty!r}")

@@ -7,6 +7,8 @@
     first. Choose the task with the least total pickup distance over those ``H + 1``
     decisions. All candidates are rolled out at once (vectorised over candidates), so a
     decision costs ``O(H * N * (M + N))``. ``H = 0`` is MPDM, tie-breaking included.
+    With ``baselines.lookahead_candidates=K`` and more than ``K`` queued tasks, the
+    rollouts play on the ``K`` tasks nearest the free robot only (LoRR's pools).
 ``hungarian``
     A minimum-cost assignment (``scipy.optimize.linear_sum_assignment``) of the queued
     tasks to all robots, where a robot's cost for a task is its time until free plus the
@@ -25,7 +27,7 @@ from collections.abc import Mapping
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from rtaw_marl.envs.features import robot_features
+from rtaw_marl.envs.features import candidate_slots, robot_features
 from rtaw_marl.envs.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.baselines import BaselinePolicy, free_times
@@ -113,12 +115,18 @@ class Lookahead(BaselinePolicy):
         *,
         horizon: int,
         noise_mean: float | None = None,
+        candidates: int | None = None,
     ) -> None:
         super().__init__(navigator, scale)
         if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 0:
             raise ConfigError(f"lookahead horizon must be an integer >= 0, got {horizon!r}")
+        if candidates is not None and (
+            isinstance(candidates, bool) or not isinstance(candidates, int) or candidates < 1
+        ):
+            raise ConfigError(f"lookahead candidates must be an integer >= 1, got {candidates!r}")
         self.horizon = horizon
         self.noise_mean = None if noise_mean is None else float(noise_mean)
+        self.candidates = candidates
 
     def act_sim(self, sim: WarehouseSim) -> int:
         if self.horizon == 0:
@@ -126,6 +134,14 @@ class Lookahead(BaselinePolicy):
         noise = sim.config.noise_mean if self.noise_mean is None else self.noise_mean
         robots, me = _observed_robots(sim)
         rows, mask = sim.queue_rows, sim.queue_mask
+        if self.candidates is not None and int(mask.sum()) > self.candidates:
+            # Large pools: roll out on the K tasks nearest the free robot only (a
+            # sub-queue), so a decision costs O(H K (M + K)), not O(H N (M + N)).
+            sub = candidate_slots(sim.robot_distances(), mask, self.candidates)
+            pick = self._choose(
+                sim.navigator, sim.layout.scale, robots, me, rows[sub], mask[sub], noise
+            )
+            return int(sub[pick])
         return self._choose(sim.navigator, sim.layout.scale, robots, me, rows, mask, noise)
 
     def act(self, observation: Mapping[str, np.ndarray]) -> int:

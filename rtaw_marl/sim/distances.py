@@ -210,7 +210,14 @@ class GridDistance(DistanceModel):
         key = (int(y) + 1) * self._wp + int(x) + 1
         row = self._cache.get(key)
         if row is None:
-            return self.fields(np.array([[x, y]]))[0]
+            # One search straight into the cache (no stacking of a batch of one).
+            out = np.empty((1, self._free_padded.size), dtype=np.int32)
+            bfs_fields(self._free_padded, self._wp, np.array([key], dtype=np.int64), out)
+            self.fields_computed += 1
+            row = self._cache[key] = out[0]
+            if len(self._cache) > self._capacity:
+                self._cache.popitem(last=False)
+            return row
         self._cache.move_to_end(key)
         return row
 

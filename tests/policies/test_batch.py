@@ -79,3 +79,26 @@ def test_parameters_and_the_observation_path() -> None:
         BaselinesConfig(batch_cap=0)
     with pytest.raises(NotImplementedError, match="acts on the simulator only"):
         rule.act({})
+
+
+def test_lookahead_on_k_candidates_is_lookahead_on_that_sub_queue() -> None:
+    """lookahead_candidates=K: with K >= the queue it is lookahead itself; with fewer it
+    picks among the K origins nearest the free robot."""
+    from rtaw_marl.envs.features import candidate_slots
+    from rtaw_marl.scenarios import SCENARIOS
+    from rtaw_marl.sim.builder import build_sim
+
+    sim = build_sim(SCENARIOS["C_astar_m10"].with_env(queue_len=20, num_tasks=60).spec())
+    full = make_baseline("lookahead")
+    wide = make_baseline("lookahead", params=BaselinesConfig(lookahead_candidates=20))
+    narrow = make_baseline("lookahead", params=BaselinesConfig(lookahead_candidates=5))
+    sim.reset(2)
+    while not sim.done:
+        choice = full.act_sim(sim)
+        assert wide.act_sim(sim) == choice
+        if sim.queue_mask.sum() > 5:
+            near = candidate_slots(sim.robot_distances(), sim.queue_mask, 5)
+            assert narrow.act_sim(sim) in near.tolist()
+        sim.step(choice)
+    with pytest.raises(ConfigError, match=r"lookahead_candidates must be an integer >= 1"):
+        BaselinesConfig(lookahead_candidates=0)

@@ -131,6 +131,9 @@ class PIBTConfig(NavigatorOption):
             its priority is drawn at random each timestep (priority rotation).
         record: Keep every robot's cell at every timestep, for the conflict checker and
             the renderer (``4 M`` bytes per timestep).
+        cache_mb: Memory of the distance fields kept (LRU), shared by the policy's
+            queries and the robots' goals: lifelong fleets revisit cells (a robot
+            decides at the delivery cell whose field it followed).
     """
 
     name: str = "pibt"
@@ -140,11 +143,16 @@ class PIBTConfig(NavigatorOption):
     stall_limit: int = 10_000
     patience: int = 16
     record: bool = True
+    cache_mb: float = 1024.0
 
     def __post_init__(self) -> None:
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
         _check_positive("navigator.patience", self.patience, "integer", int)
+        _check_positive("navigator.cache_mb", self.cache_mb, "number", float)
         super().__post_init__()
+
+    def distance_model(self, layout: Layout) -> DistanceModel:
+        return GridDistance(layout, cache_mb=self.cache_mb)
 
     def executor(self) -> Executor:
         return PIBTExecutor(
