@@ -137,14 +137,8 @@ class FleetExecutor(Executor):
             raise InvalidActionError("the schedule is complete only when the episode is done")
         fleet, rec = self.fleet, self._records
         served = np.flatnonzero(rec.task_robot >= 0)
-        return Schedule(
-            positions=fleet.positions(),
-            tasks=rec.tasks[served].copy(),
-            task_robot=rec.task_robot[served].copy(),
-            task_arrival=rec.task_arrival[served].astype(np.int64),
-            task_assigned=rec.task_assigned[served].astype(np.int64),
-            task_pickup=fleet.task_pickup[served].copy(),
-            task_delivered=fleet.task_delivered[served].copy(),
+        return Schedule.of_tasks(
+            fleet.positions(), rec, served, fleet.task_pickup, fleet.task_delivered
         )
 
     def stats(self) -> dict[str, float]:

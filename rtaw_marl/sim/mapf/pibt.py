@@ -330,16 +330,9 @@ class PIBTExecutor(Executor):
             raise InvalidActionError("the schedule is complete only when the episode is done")
         if not self.record:
             raise ConfigError("navigator.record=false: this pibt episode kept no positions")
-        rec = self.rec
         served = np.flatnonzero(self.delivered_at >= 0)
-        return Schedule(
-            positions=self.cells[np.stack(self.trace)],
-            tasks=rec.tasks[served].copy(),
-            task_robot=rec.task_robot[served].copy(),
-            task_arrival=rec.task_arrival[served].astype(np.int64),
-            task_assigned=rec.task_assigned[served].astype(np.int64),
-            task_pickup=self.pickup_at[served].copy(),
-            task_delivered=self.delivered_at[served].copy(),
+        return Schedule.of_tasks(
+            self.cells[np.stack(self.trace)], self.rec, served, self.pickup_at, self.delivered_at
         )
 
     def stats(self) -> dict[str, float]:

@@ -12,8 +12,12 @@ the row of :attr:`rtaw_marl.sim.layout.Layout.obstacles`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from rtaw_marl.sim.execution import EpisodeRecords
 
 __all__ = ["Schedule"]
 
@@ -40,6 +44,23 @@ class Schedule:
     task_assigned: np.ndarray
     task_pickup: np.ndarray
     task_delivered: np.ndarray
+
+    @classmethod
+    def of_tasks(
+        cls, positions: np.ndarray, records: EpisodeRecords, served: np.ndarray,
+        pickup: np.ndarray, delivered: np.ndarray,
+    ) -> Schedule:  # fmt: skip
+        """A schedule of the tasks ``served int [K]`` of an episode's records, with the
+        executor's ``pickup`` and ``delivered`` times of every task (``int [T]``)."""
+        return cls(
+            positions=positions,
+            tasks=records.tasks[served].copy(),
+            task_robot=records.task_robot[served].copy(),
+            task_arrival=records.task_arrival[served].astype(np.int64),
+            task_assigned=records.task_assigned[served].astype(np.int64),
+            task_pickup=np.asarray(pickup)[served].astype(np.int64),
+            task_delivered=np.asarray(delivered)[served].astype(np.int64),
+        )
 
     @property
     def num_robots(self) -> int:
