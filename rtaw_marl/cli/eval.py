@@ -100,7 +100,8 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
     try:
         # smoothing=0: the bar's ETA is the run's average rate, not the last policy's.
         with tqdm(
-            total=todo * sim.config.num_tasks,
+            # A horizon episode's decisions are known only at its end (num_tasks bounds them).
+            total=None if sim.config.episode_mode == "horizon" else todo * sim.config.num_tasks,
             unit="dec",
             disable=not cfg.progress,
             leave=False,

@@ -198,6 +198,7 @@ from rtaw_marl.errors import (
     UnknownAgentError,
     usage_error,
 )
+from rtaw_marl.scenarios import Scenario
 from rtaw_marl.scenarios import scenario as find_scenario
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
@@ -322,7 +323,7 @@ class raw_env(AECEnv):
         *,
         observation: str = "full",
         obs_format: str = "dict",
-        scenario: str | None = None,
+        scenario: str | Scenario | None = None,
         **env: Any,
     ) -> None:
         """Build the env (see the module docstring, *Arguments*).
@@ -336,8 +337,9 @@ class raw_env(AECEnv):
             render_mode: ``None``, ``"human"`` or ``"ansi"``.
             observation: ``"full"`` or ``"compact"`` (no robot table).
             obs_format: ``"dict"`` or ``"flat"`` (one vector).
-            scenario: A :data:`~rtaw_marl.scenarios.SCENARIOS` name; the groups and keys
-                given here override it.
+            scenario: A :data:`~rtaw_marl.scenarios.SCENARIOS` name or a
+                :class:`~rtaw_marl.scenarios.Scenario` (``lorr_scenario(path)``: a LoRR
+                problem); the groups and keys given here override it.
             **env: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`).
 
         Raises:
@@ -352,7 +354,7 @@ class raw_env(AECEnv):
                 f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
             )
         if scenario is not None:
-            named = find_scenario(scenario)
+            named = scenario if isinstance(scenario, Scenario) else find_scenario(scenario)
             layout = named.layout if layout is None else layout
             navigator = named.navigator if navigator is None else navigator
             tasks = named.tasks if tasks is None else tasks

@@ -154,3 +154,22 @@ def test_throughput_table_reads_eval_results() -> None:
     assert "| batch | 2 | 116 ± 70 | 0.0 | +10.0% [+3.9, +16.1]* | 20.0 |" in rows[1]
     assert "67,177" in rows[2]
     assert "94,232" in rows[3]
+
+
+def test_pettingzoo_env_takes_a_lorr_scenario(tmp_path: Path) -> None:
+    """warehouse_v1.env(scenario=lorr_scenario(path)): MPDM acting on the env's own
+    observations plays the episode act_sim plays."""
+    from rtaw_marl import warehouse_v1
+
+    path = write_problem(tmp_path, "4\n1,7\n4,0\n3,5\n7,1\n", teamSize=2)
+    s = lorr_scenario(path, horizon=30)
+    env = warehouse_v1.env(scenario=s)
+    env.reset(seed=0)
+    rule = make_baseline("mpdm", env=env)
+    for _ in env.agent_iter():
+        obs, _, term, trunc, _ = env.last()
+        env.step(None if term or trunc else rule.act(obs))
+    sim = build_sim(s.spec())
+    run_episode(sim, make_baseline("mpdm"), seed=0)
+    assert env.unwrapped.sim.metrics() == sim.metrics()
+    assert sim.metrics().tasks_finished > 0
