@@ -59,12 +59,11 @@ def bfs_compact(nbr: np.ndarray, source: int, out: np.ndarray) -> None:
 
 
 @njit(cache=True, nogil=True)
-def _candidates(i, pos, goal_field, fields, nbr, tie, cand) -> int:
+def _candidates(i, pos, goal_field, fields, nbr, tie, cand, keys) -> int:
     """Fill ``cand`` with robot ``i``'s cell and free neighbours, nearest its goal first
-    (a robot without a goal prefers to stay); returns how many."""
+    (a robot without a goal prefers to stay); returns how many. ``keys [5]`` is scratch."""
     cur = pos[i]
     count = 0
-    keys = np.empty(5)
     for k in range(5):
         c = cur if k == 4 else nbr[cur, k]
         if c < 0:
@@ -87,7 +86,9 @@ def _candidates(i, pos, goal_field, fields, nbr, tie, cand) -> int:
 
 
 @njit(cache=True, nogil=True)
-def _pibt(root, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frames, cands) -> None:
+def _pibt(
+    root, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frames, cands, keys
+) -> None:
     """PIBT from robot ``root``, with an explicit stack (numba cannot cache recursive
     functions): frame ``d`` holds a robot, its parent, its candidates and the next to try.
 
@@ -95,7 +96,7 @@ def _pibt(root, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frame
     [M, 5]`` are scratch."""
     depth = 0
     frames[0, 0], frames[0, 1], frames[0, 2] = root, -1, 0
-    frames[0, 3] = _candidates(root, pos, goal_field, fields, nbr, tie, cands[0])
+    frames[0, 3] = _candidates(root, pos, goal_field, fields, nbr, tie, cands[0], keys)
     while depth >= 0:
         i, parent = frames[depth, 0], frames[depth, 1]
         pushed = False
@@ -116,7 +117,9 @@ def _pibt(root, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frame
                 # (its fallback takes v) and we try our next cell.
                 depth += 1
                 frames[depth, 0], frames[depth, 1], frames[depth, 2] = j, i, 0
-                frames[depth, 3] = _candidates(j, pos, goal_field, fields, nbr, tie, cands[depth])
+                frames[depth, 3] = _candidates(
+                    j, pos, goal_field, fields, nbr, tie, cands[depth], keys
+                )
                 pushed = True
                 break
             # Success: this robot and every ancestor waiting on it are planned.
@@ -160,9 +163,10 @@ def pibt_step(
     nxt[:] = -1
     frames = np.empty((pos.shape[0] + 1, 4), np.int64)
     cands = np.empty((pos.shape[0] + 1, 5), np.int64)
+    keys = np.empty(5)
     for i in order:
         if nxt[i] < 0:
-            _pibt(i, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frames, cands)
+            _pibt(i, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frames, cands, keys)
     for i in range(pos.shape[0]):
         occ_now[pos[i]] = -1
     for i in range(pos.shape[0]):

@@ -297,7 +297,9 @@ class PIBTExecutor(Executor):
             # Priority rotation: a fixed order can hold two robots in a standoff forever.
             prio[stuck] = self.rng.random(int(stuck.sum())) * (prio.max() + 1.0)
             self.rotations += 1
-        order = np.lexsort((np.arange(m), ~busy, -prio))
+        # lexsort((ids, ~busy, -prio)), as one stable sort of busy-then-idle robots.
+        first = np.concatenate([np.flatnonzero(busy), np.flatnonzero(~busy)])
+        order = first[np.argsort(-prio[first], kind="stable")]
         tie = self.rng.random((m, 5))
         pibt_step(
             self.pos, order, self.goal_field, self.fields.store, self.nbr, tie, self.occ_now,
