@@ -3,16 +3,19 @@
 Usage::
 
     python experiments/throughput_table.py docs/data/throughput/*.json
+    python experiments/throughput_table.py --write docs/results.md docs/data/throughput/*.json
 
 Each file is an ``rtaw-eval`` ``results.json`` of ``horizon`` episodes (its setting
 label: the problem's map and the robots); prints the markdown table with LoRR 2024's
-published figures beside the ``warehouse_large`` rows.
+published figures beside the ``warehouse_large`` rows; ``--write`` replaces the
+``throughput`` section of a markdown file (between its BEGIN and END markers).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-import sys
+import re
 from pathlib import Path
 
 from rtaw_marl.evaluation.throughput import throughput_markdown
@@ -25,9 +28,22 @@ def _label(payload: dict) -> str:
 
 
 def main() -> None:
-    payloads = [json.loads(Path(p).read_text()) for p in sys.argv[1:]]
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("results", nargs="+", type=Path)
+    parser.add_argument("--write", type=Path, help="markdown file whose section to replace")
+    args = parser.parse_args()
+    payloads = [json.loads(p.read_text()) for p in args.results]
     payloads.sort(key=lambda p: ("warehouse" in _label(p), p["config"]["env"]["num_robots"]))
-    print(throughput_markdown([(_label(p), p) for p in payloads]))
+    table = throughput_markdown([(_label(p), p) for p in payloads])
+    if args.write is None:
+        print(table)
+        return
+    text = args.write.read_text()
+    pattern = r"(<!-- BEGIN throughput -->\n).*?(<!-- END throughput -->)"
+    if not re.search(pattern, text, flags=re.S):
+        raise SystemExit(f"{args.write}: no <!-- BEGIN throughput --> section")
+    args.write.write_text(re.sub(pattern, lambda m: m[1] + table + "\n" + m[2], text, flags=re.S))
+    print(f"rewrote the throughput section of {args.write}")
 
 
 if __name__ == "__main__":

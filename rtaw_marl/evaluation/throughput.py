@@ -78,7 +78,7 @@ def throughput_table(
     n = min((len(m["tasks_finished"]) for m in results.values()), default=0)
     legend = (
         f"throughput over {horizon} timesteps, {num_robots} robots, {n} seed(s); finished vs X: "
-        f"paired per seed, in % of X's mean (+ = more tasks); * = {level} interval excludes 0"
+        f"paired per seed, in % of X's mean (+ = more tasks); * = the {level} excludes 0"
     )
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(r) + " |" for r in rows]
