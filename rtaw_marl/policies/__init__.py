@@ -52,7 +52,12 @@ BASELINES: dict[str, _Factory] = {
     ),
     Hungarian.name: lambda nav, scale, _: Hungarian(nav, scale),
     BatchAssignment.name: lambda nav, scale, p: BatchAssignment(
-        nav, scale, region=p.batch_region, cap=p.batch_cap, penalty=p.batch_penalty
+        nav,
+        scale,
+        region=p.batch_region,
+        cap=p.batch_cap,
+        penalty=p.batch_penalty,
+        max_batch=p.batch_max,
     ),
     Hindsight.name: lambda nav, scale, p: Hindsight(p.hindsight_horizon),
 }

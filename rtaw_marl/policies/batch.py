@@ -15,8 +15,9 @@ free robot and no loaded region this is MPDM. The penalty is a soft cap: a robot
 to a capped region only when every other choice is costlier by ``penalty``.
 
 The matching costs ``O(|F|^2 N)`` and needs the fields of the ``|F|`` robot cells
-only, so it runs on LoRR's pools (``N = 15,000``), unlike ``hungarian``, whose
-all-robots matrix is ``M x N``.
+only (``|F|`` is capped at ``baselines.batch_max`` = 256: a whole fleet freed at
+``t = 0`` is matched in chunks of robots in id order), so it runs on LoRR's pools
+(``N = 15,000``), unlike ``hungarian``, whose all-robots matrix is ``M x N``.
 """
 
 from __future__ import annotations
@@ -77,16 +78,19 @@ class BatchAssignment(BaselinePolicy):
         region: Side of a pickup region, in cells.
         cap: Robots heading to one region before its tasks cost ``penalty`` more.
         penalty: That extra cost, in cells of travel.
+        max_batch: Most robots matched in one problem (the acting robot and the next
+            free ones by id).
     """
 
     name = "batch"
 
     def __init__(
         self, navigator: object = None, scale: float = 1.0, region: int = 8, cap: int = 4,
-        penalty: float = 20.0,
+        penalty: float = 20.0, max_batch: int = 256,
     ) -> None:  # fmt: skip
         super().__init__(None, scale)
         self.region, self.cap, self.penalty = int(region), int(cap), float(penalty)
+        self.max_batch = int(max_batch)
 
     def reset(self, seed: int | None = None) -> None:
         super().reset(seed)
@@ -107,11 +111,14 @@ class BatchAssignment(BaselinePolicy):
         slots = np.flatnonzero(sim.queue_mask)
         free = np.flatnonzero(sim.robot_free_at <= sim.time + 1e-9)
         free = np.union1d(free, [sim.robot])  # the acting robot is free by definition
-        me = int(np.searchsorted(free, sim.robot))
+        # The robots deciding next (in id order, as the simulator asks them), at most
+        # max_batch: a fleet freed at once (t = 0) is matched in chunks, not as one
+        # M x N problem.
+        free = free[free >= sim.robot][: self.max_batch]
+        me = 0
         if len(free) > len(slots):
             # More free robots than tasks: those nearest the tasks are served first.
-            free = np.array([sim.robot])
-            me = 0
+            free = free[:1]
         dist = sim.robot_distances_many(free, slots)
         cost = capped_costs(
             dist, sim.queue_rows[slots, :2], _heading(sim), self.region, self.cap, self.penalty

@@ -23,6 +23,7 @@ class BaselinesConfig:
         batch_cap: Robots heading to one region before ``batch`` adds its penalty to
             the region's tasks.
         batch_penalty: That penalty, in cells of travel.
+        batch_max: Most free robots ``batch`` matches in one problem.
         hindsight_horizon: Decisions of the ``hindsight`` reference's MPDM rollout over
             the real future (tasks, refills and noise).
     """
@@ -33,11 +34,12 @@ class BaselinesConfig:
     batch_region: int = 8
     batch_cap: int = 4
     batch_penalty: float = 20.0
+    batch_max: int = 256
 
     def __post_init__(self) -> None:
         check_fields(self, "baselines.")
         keys = (("lookahead_horizon", 0), ("hindsight_horizon", 0), ("batch_region", 1),
-                ("batch_cap", 1))  # fmt: skip
+                ("batch_cap", 1), ("batch_max", 1))  # fmt: skip
         for key, low in keys:
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:

@@ -102,3 +102,11 @@ def test_lookahead_on_k_candidates_is_lookahead_on_that_sub_queue() -> None:
         sim.step(choice)
     with pytest.raises(ConfigError, match=r"lookahead_candidates must be an integer >= 1"):
         BaselinesConfig(lookahead_candidates=0)
+
+
+def test_a_fleet_freed_at_once_is_matched_in_chunks() -> None:
+    """batch_max caps the robots of one matching: with one, the acting robot is matched
+    alone (MPDM's choice on the corridor); with two, the pair is matched."""
+    sim = line_sim()
+    assert make_baseline("batch", params=BaselinesConfig(batch_max=1)).act_sim(sim) == 0
+    assert make_baseline("batch", params=BaselinesConfig(batch_max=2)).act_sim(sim) == 1
