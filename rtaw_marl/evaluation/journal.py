@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.utils.atomic import disk_full_guard
 
 __all__ = ["FORMAT", "EpisodeJournal", "file_digest", "journal_path", "with_file_digests"]
@@ -54,7 +55,8 @@ def file_digest(path: str | Path) -> str:
 
 def with_file_digests(setting: Mapping[str, Any]) -> dict[str, Any]:
     """``setting`` with every file it names (a ``path`` key at any depth: the layout's,
-    the task stream's) replaced by the file's :func:`file_digest`, so that two settings
+    the task stream's; a LoRR ``problem``: its four files) replaced by the file's
+    :func:`file_digest`, so that two settings
     match when their files have the same contents, wherever they lie."""
     out: dict[str, Any] = {}
     for key, value in setting.items():
@@ -62,6 +64,11 @@ def with_file_digests(setting: Mapping[str, Any]) -> dict[str, Any]:
             out[key] = with_file_digests(value)
         elif key == "path" and isinstance(value, str):
             out[key] = file_digest(value)
+        elif key == "problem" and isinstance(value, str):
+            # A LoRR problem: the JSON and the map, agent and task files it names.
+            problem = read_problem(value)
+            files = (problem.path, problem.map_path, problem.agents_path, problem.tasks_path)
+            out[key] = [file_digest(f) for f in files]
         else:
             out[key] = value
     return out

@@ -173,3 +173,15 @@ def test_pettingzoo_env_takes_a_lorr_scenario(tmp_path: Path) -> None:
     run_episode(sim, make_baseline("mpdm"), seed=0)
     assert env.unwrapped.sim.metrics() == sim.metrics()
     assert sim.metrics().tasks_finished > 0
+
+
+def test_eval_journal_digests_the_problem_and_its_files(tmp_path: Path) -> None:
+    """rtaw-eval resume=true matches a LoRR setting by the contents of all four files."""
+    from rtaw_marl.evaluation.journal import with_file_digests
+
+    path = write_problem(tmp_path, "2\n1,7\n4,0\n")
+    before = with_file_digests({"tasks": {"name": "lorr", "problem": str(path)}})
+    (tmp_path / "t.tasks").write_text("2\n1,7\n5,0\n")
+    after = with_file_digests({"tasks": {"name": "lorr", "problem": str(path)}})
+    assert before["tasks"]["problem"][0] == after["tasks"]["problem"][0]  # the JSON
+    assert before != after
