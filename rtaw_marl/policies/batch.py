@@ -109,8 +109,7 @@ class BatchAssignment(BaselinePolicy):
 
     def _solve(self, sim: WarehouseSim) -> int:
         slots = np.flatnonzero(sim.queue_mask)
-        free = np.flatnonzero(sim.robot_free_at <= sim.time + 1e-9)
-        free = np.union1d(free, [sim.robot])  # the acting robot is free by definition
+        free = sim.free_robots()
         # The robots deciding next (in id order, as the simulator asks them), at most
         # max_batch: a fleet freed at once (t = 0) is matched in chunks, not as one
         # M x N problem.

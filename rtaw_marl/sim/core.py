@@ -253,6 +253,15 @@ class WarehouseSim:
         (``[M, K]`` to the origins of ``slots int [K]`` only, when given)."""
         return self._slots.distances_from(self.robot_xy, slots)
 
+    def free_robots(self) -> np.ndarray:
+        """``int64 [F]`` the robots free at the current decision, the selected one
+        included, ascending (under lifelong PIBT a robot delayed by traffic is busy past
+        its planned free time)."""
+        known = self._executor.free_robots(self.time)
+        if known is None:
+            known = np.flatnonzero(self.robot_free_at <= self.time + 1e-9)
+        return np.union1d(known, [self.robot]).astype(np.int64)
+
     def robot_distances_many(self, robots: np.ndarray, slots: np.ndarray) -> np.ndarray:
         """Distances ``float64 [R, K]`` from the cells of ``robots int [R]`` to the
         origins of ``slots int [K]`` (a few robots against a large pool: the fields of

@@ -354,7 +354,11 @@ class _CellSlots(TargetSlots):
         chosen = slice(None) if slots is None else np.asarray(slots)
         cells, targets = self._cells[chosen], self._xy[chosen]
         if len(xy) <= len(cells):
-            return self._nav.fields(xy)[:, cells].astype(np.float64)
+            # Row by row: stacking P whole fields first would copy P x cells entries.
+            out = np.empty((len(xy), len(cells)), dtype=np.float64)
+            for i, (x, y) in enumerate(xy.tolist()):
+                out[i] = self._nav.field(x, y)[cells]
+            return out
         return self._nav.fields(targets)[:, self._nav._padded_index(xy)].T.astype(np.float64)
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:

@@ -151,6 +151,13 @@ class Executor(ABC):
             PlanningError: No robot can ever become free (collision-aware executors).
         """
 
+    def free_robots(self, now: float) -> np.ndarray | None:
+        """The robots free at ``now`` besides the one just selected, if the executor
+        knows them better than the planned free times (``None``: robots whose planned
+        free time is ``<= now``)."""
+        del now
+        return None
+
     @abstractmethod
     def finish(self, now: float) -> None:
         """The last decision was taken at ``now``: complete every assigned task and write

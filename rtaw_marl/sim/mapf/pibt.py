@@ -214,6 +214,12 @@ class PIBTExecutor(Executor):
                 )
         return heapq.heappop(self.free), float(self.t)
 
+    def free_robots(self, now: float) -> np.ndarray:
+        # Planned free times are estimates: a robot delayed by traffic is still busy
+        # after its own. The free robots are those delivered and not yet asked.
+        del now
+        return np.asarray(self.free, dtype=np.int64)
+
     def finish(self, now: float) -> None:
         """Run until every assigned task is delivered, then record the executed times."""
         quiet = 0

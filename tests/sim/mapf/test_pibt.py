@@ -192,3 +192,17 @@ def test_config_errors_name_the_problem() -> None:
         navigator_option({"name": "pibt", "stall_limit": 0}).executor()
     with pytest.raises(ConfigError, match="two start together"):
         play(open_grid(4, 4), [(0, 0), (0, 0)], [(1, 1, 2, 2)])
+
+
+def test_free_robots_are_the_idle_ones_not_those_past_their_planned_time() -> None:
+    """Under traffic a robot is busy past its planned free time: sim.free_robots() lists
+    the robots the executor has freed, which the batch rule matches."""
+    sim = warehouse(num_robots=60, num_tasks=150)
+    sim.reset(2)
+    late = 0
+    while not sim.done:
+        free = sim.free_robots()
+        assert (sim.executor.phase[free] == 0).all()
+        late += int(((sim.robot_free_at <= sim.time) & (sim.executor.phase != 0)).sum())
+        sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
+    assert late > 0  # the planned times alone would have counted busy robots
