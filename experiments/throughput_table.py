@@ -6,7 +6,8 @@ Usage::
     python experiments/throughput_table.py --write docs/results.md docs/data/throughput/*.json
 
 Each file is an ``rtaw-eval`` ``results.json`` of ``horizon`` episodes (its setting
-label: the problem's map and the robots); prints the markdown table with LoRR 2024's
+label: the problem's map and the robots; several files of one setting and seeds, with
+other policies, are merged); prints the markdown table with LoRR 2024's
 published figures beside the ``warehouse_large`` rows; ``--write`` replaces the
 ``throughput`` section of a markdown file (between its BEGIN and END markers).
 """
@@ -32,9 +33,25 @@ def main() -> None:
     parser.add_argument("results", nargs="+", type=Path)
     parser.add_argument("--write", type=Path, help="markdown file whose section to replace")
     args = parser.parse_args()
-    payloads = [json.loads(p.read_text()) for p in args.results]
-    payloads.sort(key=lambda p: ("warehouse" in _label(p), p["config"]["env"]["num_robots"]))
-    table = throughput_markdown([(_label(p), p) for p in payloads])
+    merged: dict[str, dict] = {}
+    for path in args.results:
+        payload = json.loads(path.read_text())
+        label = _label(payload)
+        if label not in merged:
+            merged[label] = payload
+            continue
+        # Several rtaw-eval runs of one setting (other policies): one row group.
+        first = merged[label]
+        if first["config"]["env"] != payload["config"]["env"] or first["seeds"] != payload["seeds"]:
+            raise SystemExit(f"{path}: not the setting and seeds of the other {label} results")
+        twice = set(first["policies"]) & set(payload["policies"])
+        if twice:
+            raise SystemExit(f"{path}: {sorted(twice)[0]} is evaluated twice for {label}")
+        first["policies"] = {**first["policies"], **payload["policies"]}
+    order = sorted(
+        merged, key=lambda k: ("warehouse" in k, merged[k]["config"]["env"]["num_robots"])
+    )
+    table = throughput_markdown([(k, merged[k]) for k in order])
     if args.write is None:
         print(table)
         return
