@@ -317,5 +317,5 @@ def test_make_baseline() -> None:
         assert type(policy) is cls
         assert policy.navigator is nav
         assert policy.scale == 4.0
-    with pytest.raises(ConfigError, match="unknown policy 'greedy'; available: hindsight, hu"):
+    with pytest.raises(ConfigError, match="unknown policy 'greedy'; available: batch, hindsi"):
         make_baseline("greedy")

@@ -12,12 +12,9 @@ the row of :attr:`rtaw_marl.sim.layout.Layout.obstacles`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from rtaw_marl.sim.execution import EpisodeRecords
 
 __all__ = ["Schedule"]
 
@@ -47,11 +44,12 @@ class Schedule:
 
     @classmethod
     def of_tasks(
-        cls, positions: np.ndarray, records: EpisodeRecords, served: np.ndarray,
+        cls, positions: np.ndarray, records: Any, served: np.ndarray,
         pickup: np.ndarray, delivered: np.ndarray,
     ) -> Schedule:  # fmt: skip
-        """A schedule of the tasks ``served int [K]`` of an episode's records, with the
-        executor's ``pickup`` and ``delivered`` times of every task (``int [T]``)."""
+        """A schedule of the tasks ``served int [K]`` of an episode's records (an
+        :class:`~rtaw_marl.sim.execution.EpisodeRecords`, which imports this module), with
+        the executor's ``pickup`` and ``delivered`` times of every task (``int [T]``)."""
         return cls(
             positions=positions,
             tasks=records.tasks[served].copy(),
