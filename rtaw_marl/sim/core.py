@@ -57,7 +57,7 @@ __all__ = ["SimState", "WarehouseSim"]
 _STATE_ARRAYS = (
     "tasks", "task_length", "robot_start_xy", "robot_busy", "task_arrival", "task_assigned",
     "task_ttd", "task_finished", "task_robot", "queue_ids", "robot_xy", "robot_free_at",
-    "queue_mask", "queue_rows", "queue_length",
+    "queue_mask", "queue_rows", "queue_length", "_owed",
 )  # fmt: skip
 _STATE_SCALARS = ("robot", "time", "decisions", "done", "truncated", "last_ttd", "_next_task")
 

@@ -185,3 +185,21 @@ def test_eval_journal_digests_the_problem_and_its_files(tmp_path: Path) -> None:
     after = with_file_digests({"tasks": {"name": "lorr", "problem": str(path)}})
     assert before["tasks"]["problem"][0] == after["tasks"]["problem"][0]  # the JSON
     assert before != after
+
+
+def test_state_round_trip_keeps_the_owed_refills(tmp_path: Path) -> None:
+    """With env.refill=finish a freed robot's refill is owed until its next decision:
+    a simulator that loads a mid-episode state plays the same rest of the episode."""
+    path = write_problem(tmp_path, "4\n1,7\n4,0\n3,5\n7,1\n")
+    spec = lorr_scenario(path, navigator="astar", horizon=40).spec()
+    a, b = build_sim(spec), build_sim(spec)
+    a.reset(0)
+    b.reset(1)
+    for _ in range(3):
+        a.step(int(np.flatnonzero(a.queue_mask)[0]))
+    b.load_state(a.state())
+    for sim in (a, b):
+        while not sim.done:
+            sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
+    assert a.metrics() == b.metrics()
+    assert a.metrics().tasks_served > 3
