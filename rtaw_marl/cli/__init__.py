@@ -27,6 +27,7 @@ __all__ = [
     "study_main",
     "train_main",
     "zoo_main",
+    "lorr_main",
 ]
 
 #: Extra -> the top-level modules it installs that the commands import.
@@ -45,6 +46,8 @@ NEEDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "study": ("train", EXTRAS["cli"] + EXTRAS["train"]),
     # Retraining the shipped policies: rtaw-train's needs.
     "zoo": ("train", EXTRAS["cli"] + EXTRAS["train"]),
+    # The kit's build needs pybind11 only for rtaw_marl's schedulers: checked there.
+    "lorr": ("cli", ("hydra", "omegaconf")),
 }
 
 
@@ -105,3 +108,8 @@ def study_main() -> None:
 def zoo_main() -> None:
     """``rtaw-zoo`` (:mod:`rtaw_marl.cli.zoo`)."""
     _run("zoo")
+
+
+def lorr_main() -> None:
+    """``rtaw-lorr`` (:mod:`rtaw_marl.cli.lorr`)."""
+    _run("lorr")

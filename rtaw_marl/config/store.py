@@ -18,6 +18,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, StudyConfig
+from rtaw_marl.integrations.lorr.config import LoRRConfig
 from rtaw_marl.models.config import MODELS
 from rtaw_marl.scenarios.lorr import lorr_value
 from rtaw_marl.sim.config import SimConfig
@@ -44,6 +45,7 @@ APPS: dict[str, type] = {
     "train": TrainConfig,
     "render": RenderConfig,
     "study": StudyConfig,
+    "lorr": LoRRConfig,
 }
 
 _registered = False

@@ -1,0 +1,70 @@
+"""Typed options of ``rtaw-lorr`` (registered with Hydra by :mod:`rtaw_marl.config.store`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.policies.config import BaselinesConfig
+from rtaw_marl.utils.checks import at_least, check_fields
+
+__all__ = ["LORR_DEFAULT", "LoRRConfig"]
+
+#: ``policy=lorr_default``: the start kit's own scheduler (its C++ entry).
+LORR_DEFAULT = "lorr_default"
+
+
+@dataclass(kw_only=True)
+class LoRRConfig:
+    """An ``rtaw-lorr`` run: schedulers inside LoRR's own simulator.
+
+    Attributes:
+        problem: The LoRR 2024 problem JSON (required unless ``build_only``).
+        policy: Schedulers, one ``lifelong`` run each: ``lorr_default`` (the kit's own),
+            any rule of ``rtaw-eval`` but ``hindsight`` (``mpdm``, ``lookahead``,
+            ``batch``, ...), ``checkpoint`` and ``pretrained``.
+        checkpoint: Checkpoint path(s) when ``policy`` includes ``checkpoint``.
+        pretrained: Shipped policy name(s) when ``policy`` includes ``pretrained``.
+        candidates: Learned policies score only the ``K`` nearest queued tasks.
+        baselines: Parameters of the rules.
+        timesteps: LoRR's ``simulationTime`` (its competition runs 5,000).
+        plan_time_ms: LoRR's ``planTimeLimit`` per timestep, for scheduler and planner
+            together; its default planner uses all of it, so a run takes about
+            ``timesteps x plan_time_ms``.
+        preprocess_time_ms: LoRR's ``preprocessTimeLimit``.
+        share: The part of ``plan_time_ms`` the scheduler may use (the kit's default
+            scheduler takes half); robots not served in it wait for the next timestep.
+        output: Where ``results.json`` goes; ``None``: the run folder.
+        kit: The start kit's sources; ``None``: ``RTAW_LORR_KIT`` or ``../shared``.
+        cache: Where builds are kept; ``None``: ``RTAW_LORR_CACHE`` or
+            ``~/.cache/rtaw_marl/lorr``.
+        build_only: Build (once per machine) and stop.
+    """
+
+    problem: str | None = None
+    policy: Any = field(default_factory=lambda: [LORR_DEFAULT, "mpdm"])
+    checkpoint: Any = None
+    pretrained: Any = None
+    candidates: int | None = None
+    baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
+    timesteps: int = 500
+    plan_time_ms: int = 1000
+    preprocess_time_ms: int = 30000
+    share: float = 0.5
+    output: str | None = None
+    kit: str | None = None
+    cache: str | None = None
+    build_only: bool = False
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        at_least(self, "", 1, "timesteps")
+        at_least(self, "", 1, "plan_time_ms")
+        at_least(self, "", 1, "preprocess_time_ms")
+        if self.candidates is not None:
+            at_least(self, "", 1, "candidates")
+        if not 0 < float(self.share) <= 1:
+            raise ConfigError(f"share must be in (0, 1], got {self.share}")
+        if self.problem is None and not self.build_only:
+            raise ConfigError("rtaw-lorr needs problem=FILE.json (a LoRR 2024 problem)")

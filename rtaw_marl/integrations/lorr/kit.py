@@ -1,0 +1,256 @@
+"""LoRR's 2024 start kit, built once per machine into a cache folder.
+
+Two builds of the same sources (v2.1.2, MIT, ``../shared/lorr/start-kit-v2.1.2`` beside
+the project or ``RTAW_LORR_KIT``): ``python``, the scheduler track with Python (the
+kit's default planner; ``pyTaskScheduler.py`` schedules), which serves rtaw_marl
+policies, and ``default``, the kit's own C++ entry (its default scheduler and planner),
+LoRR's reference. A build lives in ``~/.cache/rtaw_marl/lorr/<variant>-<hash>``
+(``RTAW_LORR_CACHE``), keyed by the kit's sources, the Python and pybind11: made under a
+file lock in a temporary folder, then renamed, so concurrent callers (test workers)
+build it once and never see half a build.
+
+What it needs: cmake, a C++17 compiler, make, Boost (program_options, system,
+filesystem, log) and pybind11 (``pip install 'rtaw_marl[lorr]'``). Missing system
+packages are installed with ``apt-get`` when this process may (root); otherwise the
+error names the command.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from rtaw_marl.errors import ConfigError
+
+__all__ = ["KIT_VERSION", "KitBuild", "StartKitError", "build_kit", "kit_source"]
+
+KIT_VERSION = "2.1.2"
+VARIANTS = ("python", "default")
+#: What the build needs from the system: a file that shows it, and its Debian package.
+_SYSTEM = (
+    ("cmake", "cmake"),
+    ("c++", "g++"),
+    ("make", "make"),
+    ("/usr/include/boost/program_options.hpp", "libboost-program-options-dev"),
+    ("/usr/include/boost/system/error_code.hpp", "libboost-system-dev"),
+    ("/usr/include/boost/filesystem.hpp", "libboost-filesystem-dev"),
+    ("/usr/include/boost/log/core.hpp", "libboost-log-dev"),
+)
+#: The kit's files a build reads (not its example problems).
+_SOURCES = ("CMakeLists.txt", "version.txt", "src", "inc", "default_planner", "python")
+
+
+class StartKitError(ConfigError):
+    """The start kit is missing, cannot be built, or a run of it failed."""
+
+
+@dataclass(frozen=True)
+class KitBuild:
+    """A finished build.
+
+    Attributes:
+        variant: ``python`` or ``default``.
+        root: Its folder (the kit's sources and ``build/``).
+    """
+
+    variant: str
+    root: Path
+
+    @property
+    def lifelong(self) -> Path:
+        """The simulator executable."""
+        return self.root / "build" / "lifelong"
+
+    @property
+    def module_dir(self) -> Path:
+        """Where the ``MAPF`` Python module of the ``python`` build is."""
+        return self.root / "build"
+
+
+def kit_source(path: str | Path | None = None) -> Path:
+    """The start kit's sources: ``path``, ``RTAW_LORR_KIT``, or ``../shared`` beside the
+    project.
+
+    Raises:
+        StartKitError: No start kit there (the message says where it looked).
+    """
+    if path is None:
+        path = os.environ.get("RTAW_LORR_KIT")
+    if path is None:
+        project = Path(__file__).resolve().parents[3]
+        path = project.parent / "shared" / "lorr" / f"start-kit-v{KIT_VERSION}"
+    path = Path(path)
+    if not (path / "CMakeLists.txt").is_file() or not (path / "python").is_dir():
+        raise StartKitError(
+            f"LoRR start kit v{KIT_VERSION} not found at {path} (give kit=PATH or set "
+            "RTAW_LORR_KIT)"
+        )
+    return path.resolve()
+
+
+def cache_root(path: str | Path | None = None) -> Path:
+    """Where builds are cached: ``path``, ``RTAW_LORR_CACHE`` or ``~/.cache/rtaw_marl/lorr``."""
+    if path is None:
+        path = os.environ.get("RTAW_LORR_CACHE") or Path.home() / ".cache" / "rtaw_marl" / "lorr"
+    return Path(path)
+
+
+def build_kit(
+    variant: str = "python",
+    source: str | Path | None = None,
+    cache: str | Path | None = None,
+    log: Callable[[str], None] = lambda line: print(line, file=sys.stderr),
+) -> KitBuild:
+    """The cached build of ``variant``, made first if missing (a few minutes).
+
+    Raises:
+        StartKitError: Unknown variant, no kit, a missing tool that cannot be installed,
+            or a failed build step (the message names the step and its log).
+    """
+    if variant not in VARIANTS:
+        raise StartKitError(f"unknown start kit build {variant!r}; valid: {', '.join(VARIANTS)}")
+    src = kit_source(source)
+    pybind_dir = _pybind11_dir() if variant == "python" else None
+    key = _build_key(src, variant, pybind_dir)
+    root = cache_root(cache)
+    build = KitBuild(variant, root / f"{variant}-{key}")
+    if build.lifelong.is_file():
+        return build
+    root.mkdir(parents=True, exist_ok=True)
+    with _locked(root / f".{variant}.lock"):
+        if build.lifelong.is_file():  # another process built it meanwhile
+            return build
+        ensure_system_packages(log)
+        log(f"building LoRR's start kit v{KIT_VERSION} ({variant}) into {build.root} ...")
+        tmp = root / f".{build.root.name}.tmp"
+        shutil.rmtree(tmp, ignore_errors=True)
+        _copy_sources(src, tmp)
+        _compile(tmp, variant, pybind_dir)
+        os.replace(tmp, build.root)
+    log(f"built {build.lifelong}")
+    return build
+
+
+def missing_packages() -> list[str]:
+    """The Debian packages of the build's tools and libraries that are missing."""
+    missing = []
+    for probe, package in _SYSTEM:
+        found = Path(probe).is_file() if probe.startswith("/") else shutil.which(probe)
+        if not found:
+            missing.append(package)
+    return missing
+
+
+def ensure_system_packages(log: Callable[[str], None]) -> None:
+    """Install the missing packages with ``apt-get`` (as root), or say which.
+
+    Raises:
+        StartKitError: Packages are missing and cannot be installed here.
+    """
+    missing = missing_packages()
+    if not missing:
+        return
+    command = ["apt-get", "install", "-y", "--no-install-recommends", *missing]
+    if shutil.which("apt-get") is None or os.geteuid() != 0:
+        raise StartKitError(
+            f"the start kit needs {', '.join(missing)}; install them ({' '.join(command)})"
+        )
+    log(f"installing {', '.join(missing)} with apt-get ...")
+    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
+    for attempt in (command, ["apt-get", "update"], command):
+        done = subprocess.run(attempt, capture_output=True, text=True, env=env)
+        if done.returncode == 0 and attempt is command and not missing_packages():
+            return
+    tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
+    raise StartKitError(f"apt-get could not install {', '.join(missing)}: {tail[0]}")
+
+
+def _pybind11_dir() -> str:
+    try:
+        import pybind11
+    except ModuleNotFoundError:
+        raise StartKitError(
+            "the start kit's Python build needs pybind11: pip install 'rtaw_marl[lorr]'"
+        ) from None
+    return str(pybind11.get_cmake_dir())
+
+
+def _build_key(src: Path, variant: str, pybind_dir: str | None) -> str:
+    digest = hashlib.sha256(f"{variant}|{sys.version}|{pybind_dir}".encode())
+    for name in _SOURCES:
+        for file in sorted((src / name).rglob("*")) if (src / name).is_dir() else [src / name]:
+            if file.is_file() and "tmp" not in file.relative_to(src).parts:
+                digest.update(str(file.relative_to(src)).encode())
+                digest.update(file.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+def _copy_sources(src: Path, dest: Path) -> None:
+    dest.mkdir(parents=True)
+    for name in _SOURCES:
+        if (src / name).is_dir():
+            # A tmp/ the kit's set_track.bash left in the sources is not ours.
+            shutil.copytree(src / name, dest / name, ignore=shutil.ignore_patterns("tmp"))
+        else:
+            shutil.copy2(src / name, dest / name)
+
+
+def _compile(root: Path, variant: str, pybind_dir: str | None) -> None:
+    log_file = root / "build.log"
+    steps: list[tuple[str, list[str]]] = []
+    if variant == "python":
+        python = sys.executable
+        steps.append(("set_track.bash scheduler", ["bash", "python/set_track.bash", "scheduler"]))
+        steps.append(
+            ("cmake", [
+                "cmake", "-B", "build", "./", "-DPYTHON=true", "-DCMAKE_BUILD_TYPE=Release",
+                f"-Dpybind11_DIR={pybind_dir}", f"-DPython_EXECUTABLE={python}",
+                f"-DPYTHON_EXECUTABLE={python}",
+                f"-DPython_ROOT_DIR={sysconfig.get_config_var('prefix')}",
+            ])
+        )  # fmt: skip
+    else:
+        steps.append(
+            (
+                "cmake",
+                ["cmake", "-B", "build", "./", "-DPYTHON=false", "-DCMAKE_BUILD_TYPE=Release"],
+            )
+        )
+    steps.append(("make", ["make", "-C", "build", f"-j{os.cpu_count() or 1}"]))
+    with open(log_file, "w", encoding="utf-8") as fh:
+        for name, command in steps:
+            fh.write(f"$ {' '.join(command)}\n")
+            fh.flush()
+            done = subprocess.run(command, cwd=root, stdout=fh, stderr=subprocess.STDOUT)
+            if done.returncode != 0:
+                kept = root.parent / f"{root.name.strip('.')}.failed.log"
+                shutil.copy2(log_file, kept)
+                raise StartKitError(
+                    f"start kit build failed at {name} (exit {done.returncode}): "
+                    f"{_last_error(kept)} (log: {kept})"
+                )
+
+
+def _last_error(log_file: Path) -> str:
+    lines = [ln.strip() for ln in log_file.read_text(errors="replace").splitlines() if ln.strip()]
+    errors = [ln for ln in lines if "error" in ln.lower()]
+    return (errors or lines or ["no output"])[0][:200]
+
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    with open(path, "w") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
