@@ -115,7 +115,9 @@ def _tiny(root: Path) -> Path:
 
 
 def _scheduler(problem: Path, policy: str, **spec: object) -> PolicyScheduler:
-    return build_scheduler(RunSpec(problem=str(problem), policy=policy, stats="-", timesteps=1, **spec))
+    return build_scheduler(
+        RunSpec(problem=str(problem), policy=policy, stats="-", timesteps=1, **spec)
+    )
 
 
 def _play(problem: Path, scheduler: PolicyScheduler, steps: int, budget: float = 1.0) -> FakeLoRR:
@@ -174,7 +176,8 @@ def test_busy_robots_keep_their_tasks(tmp_path: Path) -> None:
     step = lorr.step()
     again = scheduler.plan(step, 1.0)
     busy = np.flatnonzero(step.schedule >= 0)
-    assert busy.size and all(again[r] == step.schedule[r] for r in busy)
+    assert busy.size
+    assert all(again[r] == step.schedule[r] for r in busy)
 
 
 def test_out_of_time_robots_wait(tmp_path: Path) -> None:
@@ -198,7 +201,9 @@ def test_refused_schedule_returns_tasks_to_the_queue(tmp_path: Path) -> None:
     # queue there would be 1 open task for 2 robots.
     lorr.t += 1
     second = scheduler.plan(lorr.step(), 1.0)
-    assert -1 not in second and set(second) <= set(lorr.pool) and len(set(second)) == 2
+    assert -1 not in second
+    assert set(second) <= set(lorr.pool)
+    assert len(set(second)) == 2
 
 
 @pytest.mark.skipif(not RANDOM.is_file(), reason="LoRR start kit not in ../shared")
