@@ -23,11 +23,11 @@ __all__ = [
     "EXTRAS",
     "NEEDS",
     "eval_main",
+    "lorr_main",
     "render_main",
     "study_main",
     "train_main",
     "zoo_main",
-    "lorr_main",
 ]
 
 #: Extra -> the top-level modules it installs that the commands import.
