@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format bench clean
+.PHONY: demo test lint format bench clean lorr-kit
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
@@ -31,7 +31,13 @@ demo: $(STAMP)
 		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
 
-test: $(STAMP)
+# LoRR's start kit (../shared), built once per machine into ~/.cache/rtaw_marl/lorr: a
+# few minutes the first time (apt-get installs cmake and Boost where missing), then
+# nothing. Its tests (tests/integrations/test_lorr_kit.py) run rtaw_marl schedulers in it.
+lorr-kit: $(STAMP)
+	$(BIN)/python -m rtaw_marl.integrations.lorr.kit
+
+test: $(STAMP) lorr-kit
 	$(BIN)/ruff check rtaw_marl tests experiments
 	$(BIN)/ruff format --check rtaw_marl tests experiments
 	$(BIN)/python -m pytest -n 2 -q

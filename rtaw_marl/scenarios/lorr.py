@@ -28,7 +28,7 @@ def lorr_scenario(
     problem: str | Path | LoRRProblem,
     num_robots: int | None = None,
     starts: str = "file",
-    navigator: str = "pibt",
+    navigator: str | Mapping[str, Any] = "pibt",
     **env: object,
 ) -> Scenario:
     """A LoRR problem as a :class:`~rtaw_marl.scenarios.Scenario`.

@@ -225,15 +225,35 @@ class GridDistance(DistanceModel):
         a = np.asarray(a, dtype=np.int64).reshape(-1, 2)
         b = np.asarray(b, dtype=np.int64).reshape(-1, 2)
         out = np.empty(len(a), dtype=np.float64)
-        # Batch by target so each distinct target costs one field lookup.
+        src = self._padded_index(a)
+        # Grouped by target: each distinct target costs one field lookup, read in place
+        # (stacking thousands of fields of a large map would copy gigabytes).
         uniq, inverse = np.unique(self._padded_index(b), return_inverse=True)
-        for start in range(0, len(uniq), self._capacity // 2):
-            chunk = np.arange(start, min(start + self._capacity // 2, len(uniq)))
-            targets = np.stack([uniq[chunk] % self._wp - 1, uniq[chunk] // self._wp - 1], axis=1)
-            fields = self.fields(targets)
-            sel = np.flatnonzero((inverse >= chunk[0]) & (inverse <= chunk[-1]))
-            out[sel] = fields[inverse[sel] - chunk[0], self._padded_index(a[sel])]
+        order = np.argsort(inverse, kind="stable")
+        bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
+        step = max(1, self._capacity // 2)
+        for start in range(0, len(uniq), step):
+            keys = uniq[start : start + step].tolist()
+            self._compute_missing(keys)
+            for j, key in enumerate(keys, start):
+                rows = order[bounds[j] : bounds[j + 1]]
+                out[rows] = self._cache[key][src[rows]]
         return self._checked(out, a, b)
+
+    def _compute_missing(self, keys: list[int]) -> None:
+        """Put the fields of the padded cells ``keys`` in the cache (one kernel call for
+        the missing ones) and mark them recently used."""
+        missing = [k for k in keys if k not in self._cache]
+        if missing:
+            out = np.empty((len(missing), self._free_padded.size), dtype=np.int32)
+            bfs_fields(self._free_padded, self._wp, np.asarray(missing, dtype=np.int64), out)
+            self.fields_computed += len(missing)
+            for k, row in zip(missing, out, strict=True):
+                self._cache[k] = row
+        for k in keys:
+            self._cache.move_to_end(k)
+        while len(self._cache) > self._capacity:
+            self._cache.popitem(last=False)
 
     def distance_matrix(self, sources: np.ndarray, targets: np.ndarray) -> np.ndarray:
         sources = np.asarray(sources, dtype=np.int64).reshape(-1, 2)
