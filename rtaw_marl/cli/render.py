@@ -1,4 +1,5 @@
-"""``rtaw-render``: play one episode and save it as an animated GIF.
+"""``rtaw-render``: play one episode and save it as an animated GIF (or, with an
+``output`` ending in ``.json``, in LoRR's output format, for its viewer PlanViz).
 
 The episode runs with a collision-aware navigator (``sipp`` by default, or ``cbs``), is
 checked by the independent conflict checker, then drawn: robots moving along their
@@ -8,6 +9,8 @@ Examples::
 
     rtaw-render layout=A policy=pretrained pretrained=A_astar_m10 output=episode.gif
     rtaw-render navigator=cbs env.num_tasks=20 every=2 fps=12
+    rtaw-render scenario=lorr tasks.problem=P.json env.horizon=500 env.num_tasks=5000 \
+        navigator=pibt output=episode.json
 """
 
 from __future__ import annotations
@@ -44,11 +47,25 @@ def run(cfg: DictConfig | RenderConfig) -> Path:
     output = check_writable_file(
         cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif"
     )
+    if output.suffix not in (".gif", ".json"):
+        raise ConfigError(
+            f"output must end in .gif (an animation) or .json (LoRR's output format), got "
+            f"{str(output)!r}"
+        )
     sim = build_sim(cfg.sim_spec())
     (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
     metrics = run_episode(sim, policy, int(cfg.seed))
     schedule = sim.schedule()
     check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
+    if output.suffix == ".json":
+        from rtaw_marl.integrations.lorr.output import write_episode
+
+        path = write_episode(schedule, output, horizon=sim.config.horizon)
+        print(
+            f"{name}: {metrics.tasks_finished} tasks finished, {schedule.horizon + 1} time "
+            f"steps, schedule checked\nLoRR output (PlanViz): {path}"
+        )
+        return path
     title = f"{name} | {cfg.navigator.name} | {sim.layout.name} | seed {cfg.seed}"
     path = render_gif(
         sim.layout,

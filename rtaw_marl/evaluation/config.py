@@ -80,7 +80,9 @@ class RenderConfig(SimGroups):
         checkpoint: The checkpoint path when ``policy=checkpoint``.
         pretrained: The shipped policy name when ``policy=pretrained``.
         seed: Episode seed.
-        output: The GIF; ``None`` means ``episode.gif`` in the Hydra run folder.
+        output: The GIF; ``None`` means ``episode.gif`` in the Hydra run folder. A name
+            ending in ``.json`` writes the episode in LoRR's output format instead, for
+            LoRR's viewer PlanViz (``actualPaths``, ``events``, ``tasks``; docs/lorr.md).
         fps: Frames per second.
         every: Draw every k-th time step.
         start: First time step drawn.

@@ -11,7 +11,9 @@ come from :func:`rtaw_marl.sim.lorr.lorr_env` on both paths.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.scenarios.registry import Scenario

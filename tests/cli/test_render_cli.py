@@ -32,6 +32,23 @@ def test_render_writes_a_checked_gif(navigator: str, tmp_path: Path) -> None:
     assert not list(tmp_path.glob(".*tmp"))
 
 
+def test_render_writes_lorr_output(tmp_path: Path) -> None:
+    """output=*.json: the checked episode in LoRR's output format, which replays to the
+    episode's tasks finished (a LoRR problem, PIBT, 40 timesteps)."""
+    from rtaw_marl.integrations.lorr.output import read_replay
+    from rtaw_marl.sim.lorr import read_problem
+    from tests.cli.test_eval_cli import _tiny_lorr_problem
+
+    problem = _tiny_lorr_problem(tmp_path)
+    out = tmp_path / "episode.json"
+    overrides = ["scenario=lorr", f"tasks.problem={problem}", "env.horizon=40",
+                 "env.num_tasks=200", f"output={out}"]  # fmt: skip
+    assert run(compose(config_name="render", overrides=overrides)) == out
+    replayed = read_replay(out, read_problem(problem).layout())
+    assert replayed.positions.shape == (41, 2, 2)
+    assert replayed.tasks_finished > 5
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -224,3 +224,25 @@ def test_random_map_hundred_robots() -> None:
     policy = make_baseline("mpdm", navigator=sim.navigator, scale=sim.layout.scale)
     own = run_episode(sim, policy, 0).tasks_finished
     assert abs(lorr.finished - own) <= 0.1 * own
+
+
+def test_judge_table_ranks_and_gains() -> None:
+    """The judge's table: gains in both simulators, ranks, and Kendall's tau."""
+    from rtaw_marl.integrations.lorr.table import judge_markdown, rank_agreement
+
+    def run(n: int, sched: bool = True) -> dict:
+        stats = {"calls": 10, "seconds": 0.5, "deferred": 3} if sched else {}
+        return {"tasks_finished": n, "timeouts": 0, "schedule_errors": 0,
+                "planner_errors": 0, "scheduler": stats}  # fmt: skip
+
+    official = {
+        "config": {"timesteps": 500, "plan_time_ms": 1000},
+        "runs": {"lorr_default": run(100, False), "mpdm": run(110), "batch": run(121)},
+    }
+    own = {"seeds": [0, 1], "policies": {"mpdm": {"tasks_finished": [200, 202]},
+                                          "batch": {"tasks_finished": [198, 200]}}}  # fmt: skip
+    text = judge_markdown(official, own)
+    row = "| `batch` | 121 | +21.0% | +10.0% | 0 | 3 | 50.0 | 199 ± 13 | -1.0% [-1.0, -1.0]* |"
+    assert row + " 1 / 2 |" in text
+    assert "tau over the schedulers in both): -1.00" in text
+    assert rank_agreement({"a": 3, "b": 2, "c": 1}, {"a": 30, "b": 20, "c": 10}) == 1.0
