@@ -6,7 +6,8 @@ Usage::
     python experiments/lorr_table.py --write docs/results.md OFFICIAL.json:OWN.json ...
 
 Each argument is an ``rtaw-lorr`` results file, optionally ``:`` an ``rtaw-eval`` results
-file of the same problem and horizon (``scenario=lorr env.horizon=T``); ``--write``
+file (or several joined by ``+``: same seeds, other policies) of the same problem and
+horizon (``scenario=lorr env.horizon=T``); ``--write``
 replaces the ``lorr`` section of a markdown file (between its BEGIN and END markers).
 """
 
@@ -21,9 +22,10 @@ from rtaw_marl.integrations.lorr.table import judge_markdown
 
 
 def _section(pair: str) -> str:
-    official_path, _, own_path = pair.partition(":")
+    official_path, _, own_paths = pair.partition(":")
     official = json.loads(Path(official_path).read_text())
-    own = json.loads(Path(own_path).read_text()) if own_path else None
+    own = _merged(own_paths.split("+")) if own_paths else None
+    own_path = own_paths
     if own is not None and int(own["config"]["env"]["horizon"]) != int(
         official["config"]["timesteps"]
     ):
@@ -33,9 +35,20 @@ def _section(pair: str) -> str:
     return f"{title}\n\n{judge_markdown(official, own)}\n"
 
 
+def _merged(paths: list[str]) -> dict:
+    """Several rtaw-eval results of one setting and seeds (other policies), as one."""
+    first = json.loads(Path(paths[0]).read_text())
+    for path in paths[1:]:
+        other = json.loads(Path(path).read_text())
+        if other["config"]["env"] != first["config"]["env"] or other["seeds"] != first["seeds"]:
+            raise SystemExit(f"{path}: not the setting and seeds of {paths[0]}")
+        first["policies"] = {**first["policies"], **other["policies"]}
+    return first
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("pairs", nargs="+", help="OFFICIAL.json[:OWN.json]")
+    parser.add_argument("pairs", nargs="+", help="OFFICIAL.json[:OWN.json[+OWN2.json]]")
     parser.add_argument("--write", type=Path, help="markdown file whose section to replace")
     args = parser.parse_args()
     table = "\n".join(_section(p) for p in args.pairs)
