@@ -48,6 +48,8 @@ def run(cfg: DictConfig | LoRRConfig) -> dict[str, LoRRRun]:
         for variant in ("python", "default"):
             build_kit(variant, cfg.kit, cfg.cache)
         return {}
+    if cfg.problem is None:
+        raise ConfigError("rtaw-lorr needs problem=FILE.json (a LoRR 2024 problem)")
     problem = read_problem(str(cfg.problem))
     folder = Path(HydraConfig.get().runtime.output_dir)
     output = check_writable_file(cfg.output or folder / "results.json")

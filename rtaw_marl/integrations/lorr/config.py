@@ -66,5 +66,3 @@ class LoRRConfig:
             at_least(self, "", 1, "candidates")
         if not 0 < float(self.share) <= 1:
             raise ConfigError(f"share must be in (0, 1], got {self.share}")
-        if self.problem is None and not self.build_only:
-            raise ConfigError("rtaw-lorr needs problem=FILE.json (a LoRR 2024 problem)")
