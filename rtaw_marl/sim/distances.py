@@ -189,20 +189,10 @@ class GridDistance(DistanceModel):
 
         Missing fields are computed in one batched kernel call and cached.
         """
-        keys = self._padded_index(targets).reshape(-1)
-        missing = [k for k in dict.fromkeys(keys.tolist()) if k not in self._cache]
-        if missing:
-            out = np.empty((len(missing), self._free_padded.size), dtype=np.int32)
-            bfs_fields(self._free_padded, self._wp, np.asarray(missing, dtype=np.int64), out)
-            self.fields_computed += len(missing)
-            for k, row in zip(missing, out, strict=True):
-                self._cache[k] = row
-        rows = []
-        for k in keys.tolist():
-            self._cache.move_to_end(k)
-            rows.append(self._cache[k])
-        while len(self._cache) > self._capacity:
-            self._cache.popitem(last=False)
+        keys = self._padded_index(targets).reshape(-1).tolist()
+        self._compute_missing(keys)
+        rows = [self._cache[k] for k in keys]
+        self._evict()
         return np.stack(rows) if rows else np.empty((0, self._free_padded.size), np.int32)
 
     def field(self, x: int, y: int) -> np.ndarray:
@@ -238,12 +228,13 @@ class GridDistance(DistanceModel):
             for j, key in enumerate(keys, start):
                 rows = order[bounds[j] : bounds[j + 1]]
                 out[rows] = self._cache[key][src[rows]]
+            self._evict()
         return self._checked(out, a, b)
 
     def _compute_missing(self, keys: list[int]) -> None:
         """Put the fields of the padded cells ``keys`` in the cache (one kernel call for
-        the missing ones) and mark them recently used."""
-        missing = [k for k in keys if k not in self._cache]
+        the missing ones) and mark them recently used; :meth:`_evict` trims it after."""
+        missing = [k for k in dict.fromkeys(keys) if k not in self._cache]
         if missing:
             out = np.empty((len(missing), self._free_padded.size), dtype=np.int32)
             bfs_fields(self._free_padded, self._wp, np.asarray(missing, dtype=np.int64), out)
@@ -252,6 +243,8 @@ class GridDistance(DistanceModel):
                 self._cache[k] = row
         for k in keys:
             self._cache.move_to_end(k)
+
+    def _evict(self) -> None:
         while len(self._cache) > self._capacity:
             self._cache.popitem(last=False)
 
