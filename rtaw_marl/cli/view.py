@@ -1,0 +1,122 @@
+"""``rtaw-view``: one or two episodes in a self-contained, interactive HTML viewer.
+
+Plays ``policy`` (or two policies, side by side on the same seed) with a collision-aware
+navigator (``sipp``, ``cbs`` or ``pibt``), checks each schedule with the independent
+conflict checker, and writes one HTML file holding the data and the code (no server, no
+network; :mod:`rtaw_marl.viz.view`). ``schedule=`` shows saved episodes in LoRR's output
+format instead (``rtaw-render output=*.json``, or LoRR's own ``lifelong``), replayed and
+checked on the configured map. Progress goes to stderr.
+
+Examples::
+
+    rtaw-view layout=A policy=[mpdm,lookahead] output=view.html
+    rtaw-view scenario=lorr tasks.problem=P.json env.num_robots=10000 policy=mpdm
+    rtaw-view scenario=lorr tasks.problem=P.json schedule=lifelong_output.json
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig
+from tqdm import tqdm
+
+from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, typed
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation.config import ViewConfig
+from rtaw_marl.evaluation.evaluate import SimPolicy, run_episode
+from rtaw_marl.sim.builder import build_sim
+from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.mapf.conflicts import check_schedule
+from rtaw_marl.utils.runs import check_writable_file
+from rtaw_marl.viz.view import ViewEpisode, write_view
+
+
+def _note(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def _as_list(value: object) -> list[str]:
+    return [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
+
+
+def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpisode:
+    """One episode with a progress bar on stderr (timesteps for horizon episodes)."""
+    horizon = sim.config.horizon if sim.config.episode_mode == "horizon" else None
+    total = horizon if horizon is not None else sim.config.num_tasks
+    unit = "timestep" if horizon is not None else "decision"
+    start = time.perf_counter()
+    with tqdm(total=total, desc=f"playing {name}", unit=unit, file=sys.stderr) as bar:
+
+        def advance(decisions: int) -> None:
+            bar.update(min(int(sim.time), total) - bar.n if horizon is not None else decisions)
+
+        metrics = run_episode(sim, policy, seed, on_decisions=advance)
+        if horizon is not None:
+            bar.update(total - bar.n)
+    _note(f"{name}: played in {time.perf_counter() - start:.1f} s; checking the schedule")
+    schedule = sim.schedule()
+    check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
+    summary = {
+        "TTD": round(float(metrics.ttd), 1),
+        "tasks finished": int(metrics.tasks_finished),
+        "timesteps": schedule.horizon,
+    }
+    return ViewEpisode(name, schedule, summary)
+
+
+def _saved(cfg: ViewConfig) -> tuple[object, list[ViewEpisode]]:
+    from rtaw_marl.integrations.lorr.output import read_schedule
+
+    layout = cfg.sim_spec().layout.build()
+    episodes = []
+    for path in _as_list(cfg.schedule):
+        _note(f"replaying and checking {path}")
+        schedule = read_schedule(path, layout)
+        finished = int((schedule.task_delivered <= schedule.horizon).sum())
+        summary = {"tasks finished": finished, "timesteps": schedule.horizon}
+        episodes.append(ViewEpisode(Path(path).stem, schedule, summary))
+    return layout, episodes
+
+
+@exit_on_user_error
+def run(cfg: DictConfig | ViewConfig) -> Path:
+    """Play (or read) the episodes, then write the viewer."""
+    cfg = typed(cfg)
+    output = check_writable_file(cfg.output or f"{HydraConfig.get().runtime.output_dir}/view.html")
+    if output.suffix != ".html":
+        raise ConfigError(f"output must end in .html, got {str(output)!r}")
+    if cfg.schedule is not None:
+        layout, episodes = _saved(cfg)
+        title = cfg.title or " vs ".join(e.name for e in episodes)
+    else:
+        if not cfg.navigator.collision_aware:
+            raise ConfigError(
+                f"navigator={cfg.navigator.name} moves robots independently (they pass "
+                "through each other); view with navigator=sipp, cbs or pibt"
+            )
+        names = _as_list(cfg.policy)
+        if len(set(names)) < len(names):
+            raise ConfigError(f"policy names the same policy twice: {names}")
+        sim = build_sim(cfg.sim_spec())
+        policies = policies_from_cfg(cfg, names, sim)
+        layout = sim.layout
+        episodes = [_play(sim, name, p, int(cfg.seed)) for name, p in policies.items()]
+        title = cfg.title or (
+            f"{' vs '.join(policies)} | {cfg.navigator.name} | {layout.name} | seed {cfg.seed}"
+        )
+    path = write_view(output, layout, episodes, title, progress=_note)
+    for ep in episodes:
+        print(f"{ep.name}: " + ", ".join(f"{k} {v}" for k, v in ep.summary.items()))
+    print(f"viewer: {path} ({path.stat().st_size / 1e6:.1f} MB)")
+    return path
+
+
+main = hydra_entry("view", run)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,202 @@
+"""An executed episode packed for the browser viewer (:mod:`rtaw_marl.viz.view`).
+
+A 10,000-robot, 5,000-timestep episode holds 50 million robot positions; stored raw
+they would not fit in a page. What the page gets instead, per episode:
+
+* ``start``: ``int32 [M, 2]`` the robots' cells ``(x, y)`` at ``t = 0``;
+* ``moves``: ``uint8 [T, M]`` the move of robot ``m`` from ``t`` to ``t + 1``, one of
+  :data:`MOVES` (wait, +x, -x, +y, -y), about two bits of entropy per entry once
+  deflated; the page rebuilds positions from keyframes it computes on load;
+* ``tasks``: ``int32 [K, 9]`` ``(ox, oy, dx, dy, robot, arrival, assigned, pickup,
+  delivered)`` of every task in the schedule, numbered by assignment order (the task ids
+  of LoRR's output format, :mod:`rtaw_marl.integrations.lorr.output`);
+* ``congestion``: ``[B, H * W]`` per time bin, how many timesteps a robot with a task
+  stood still on each cell (a wait: blocked by traffic, or by its own plan);
+* ``delivered``: ``int32 [T + 1]`` tasks delivered at each timestep (the throughput).
+
+Every array is deflated (zlib) and base64-encoded: :func:`pack` gives the JSON object
+the page reads. Layout cells are ``0`` free, ``1`` obstacle, ``2`` pickup station,
+``3`` delivery station.
+"""
+
+from __future__ import annotations
+
+import base64
+import zlib
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.mapf.schedule import Schedule
+
+__all__ = [
+    "CONGESTION_BINS",
+    "MOVES",
+    "EpisodeArrays",
+    "congestion",
+    "encode",
+    "episode_arrays",
+    "layout_cells",
+    "move_codes",
+    "pack",
+]
+
+MOVES: tuple[tuple[int, int], ...] = ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))
+"""``(dx, dy)`` of move code ``0 .. 4``: wait, +x, -x, +y, -y."""
+
+CONGESTION_BINS = 100
+"""Time bins of the congestion heat map (fewer when the episode is shorter)."""
+
+# Rows of positions diffed at once: bounds the int64 temporaries at 10,000 robots.
+_CHUNK = 512
+
+
+@dataclass(frozen=True)
+class EpisodeArrays:
+    """One episode as the page's arrays (before deflating); see the module docstring."""
+
+    start: np.ndarray
+    moves: np.ndarray
+    tasks: np.ndarray
+    congestion: np.ndarray
+    bin_size: int
+    delivered: np.ndarray
+
+
+def layout_cells(layout: Layout) -> np.ndarray:
+    """``uint8 [H, W]``: 0 free, 1 obstacle, 2 pickup station, 3 delivery station."""
+    cells = layout.obstacles.astype(np.uint8)
+    for code, mask in ((2, layout.pickup), (3, layout.delivery)):
+        if mask is not None:
+            cells[mask] = code
+    return cells
+
+
+def move_codes(positions: np.ndarray) -> np.ndarray:
+    """``uint8 [T, M]`` move codes (:data:`MOVES`) of positions ``[T + 1, M, 2]``.
+
+    Raises:
+        ConfigError: A robot moves more than one cell in a timestep.
+    """
+    steps, robots = positions.shape[0] - 1, positions.shape[1]
+    codes = np.zeros((steps, robots), dtype=np.uint8)
+    for lo in range(0, steps, _CHUNK):
+        hi = min(lo + _CHUNK, steps)
+        d = np.diff(positions[lo : hi + 1], axis=0)
+        if (np.abs(d).sum(axis=-1) > 1).any():
+            t, m = np.argwhere(np.abs(d).sum(axis=-1) > 1)[0]
+            raise ConfigError(f"robot {m} moves more than one cell at timestep {lo + t}")
+        block = codes[lo:hi]
+        for code, (dx, dy) in enumerate(MOVES[1:], start=1):
+            block[(d[..., 0] == dx) & (d[..., 1] == dy)] = code
+    return codes
+
+
+def _by_assignment(schedule: Schedule) -> np.ndarray:
+    order = np.argsort(schedule.task_assigned, kind="stable")
+    return np.column_stack(
+        [
+            schedule.tasks[order],
+            schedule.task_robot[order],
+            schedule.task_arrival[order],
+            schedule.task_assigned[order],
+            schedule.task_pickup[order],
+            schedule.task_delivered[order],
+        ]
+    ).astype(np.int32)
+
+
+def _busy(tasks: np.ndarray, steps: int, robots: int) -> np.ndarray:
+    """``bool [T, M]``: robot ``m`` holds a task at ``t`` (assigned <= t < delivered)."""
+    change = np.zeros((steps + 1, robots), dtype=np.int16)
+    robot = tasks[:, 4]
+    np.add.at(change, (np.clip(tasks[:, 6], 0, steps), robot), 1)
+    np.add.at(change, (np.clip(tasks[:, 8], 0, steps), robot), -1)
+    return np.cumsum(change, axis=0, dtype=np.int16)[:steps] > 0
+
+
+def congestion(
+    positions: np.ndarray, moves: np.ndarray, tasks: np.ndarray, shape: tuple[int, int], bins: int
+) -> tuple[np.ndarray, int]:
+    """Waits per time bin and cell.
+
+    Args:
+        positions: ``[T + 1, M, 2]`` cells ``(x, y)``.
+        moves: ``uint8 [T, M]`` move codes.
+        tasks: ``int32 [K, 9]`` (:func:`episode_arrays`' rows).
+        shape: The grid's ``(H, W)``.
+        bins: Time bins ``B``.
+
+    Returns:
+        ``(counts [B, H * W], bin_size)``: timesteps in bin ``b`` (``t // bin_size == b``)
+        at which a robot with a task stood still on each cell. A cell holds one robot
+        at a time, so a count is at most ``bin_size``.
+    """
+    steps, robots = moves.shape
+    bin_size = max(1, -(-steps // bins))
+    height, width = shape
+    cells = height * width
+    busy = _busy(tasks, steps, robots)
+    counts = np.zeros(bins * cells, dtype=np.int64)
+    for lo in range(0, steps, _CHUNK):
+        hi = min(lo + _CHUNK, steps)
+        t, m = np.nonzero((moves[lo:hi] == 0) & busy[lo:hi])
+        xy = positions[lo + t, m]
+        index = ((lo + t) // bin_size) * cells + xy[:, 1] * width + xy[:, 0]
+        counts += np.bincount(index, minlength=counts.size)
+    return counts.reshape(bins, -1), bin_size
+
+
+def episode_arrays(
+    layout: Layout, schedule: Schedule, bins: int = CONGESTION_BINS
+) -> EpisodeArrays:
+    """The page's arrays of one executed episode on ``layout``."""
+    positions = schedule.positions
+    steps = positions.shape[0] - 1
+    if steps < 1:
+        raise ConfigError("the schedule has no timestep to show")
+    height, width = layout.obstacles.shape
+    x, y = positions[..., 0], positions[..., 1]
+    if ((x < 0) | (x >= width) | (y < 0) | (y >= height)).any():
+        raise ConfigError(f"the schedule leaves the {width}x{height} grid of {layout.name!r}")
+    moves = move_codes(positions)
+    tasks = _by_assignment(schedule)
+    bins = max(1, min(bins, steps))
+    counts, bin_size = congestion(positions, moves, tasks, layout.obstacles.shape, bins)
+    dtype = np.uint16 if bin_size <= np.iinfo(np.uint16).max else np.uint32
+    done = tasks[:, 8]
+    delivered = np.bincount(done[(done >= 0) & (done <= steps)], minlength=steps + 1)
+    return EpisodeArrays(
+        start=positions[0].astype(np.int32),
+        moves=moves,
+        tasks=tasks,
+        congestion=counts.astype(dtype),
+        bin_size=bin_size,
+        delivered=delivered.astype(np.int32),
+    )
+
+
+def encode(array: np.ndarray) -> dict[str, Any]:
+    """An array as ``{"dtype", "shape", "data"}``: little-endian, deflated, base64."""
+    flat = np.ascontiguousarray(array, dtype=array.dtype.newbyteorder("<"))
+    data = base64.b64encode(zlib.compress(flat.tobytes(), 6)).decode("ascii")
+    return {"dtype": flat.dtype.name, "shape": list(array.shape), "data": data}
+
+
+def pack(arrays: EpisodeArrays, name: str, summary: dict[str, Any]) -> dict[str, Any]:
+    """One episode as the page's JSON object (``summary``: shown beside its name)."""
+    return {
+        "name": name,
+        "summary": summary,
+        "robots": int(arrays.start.shape[0]),
+        "steps": int(arrays.moves.shape[0]),
+        "bin_size": arrays.bin_size,
+        "start": encode(arrays.start),
+        "moves": encode(arrays.moves),
+        "tasks": encode(arrays.tasks),
+        "congestion": encode(arrays.congestion),
+        "delivered": encode(arrays.delivered),
+    }

@@ -1,0 +1,111 @@
+"""The interactive episode viewer: one self-contained HTML file (``rtaw-view``).
+
+The page holds its data and its code inline (no server, no network): open it in a
+browser from the disk. It replays one executed episode, or two side by side on the
+same map and clock (two policies on the same seed), drawn on a canvas:
+
+* robots coloured by state (idle, on the way to a pickup, carrying), with a legend;
+* play, pause, speed, a timeline to scrub, zoom (wheel) and pan (drag);
+* click a robot: its task, its path from assignment to delivery and its waits; find a
+  robot (``12``) or a task (``t34``) by id and follow it;
+* a congestion heat map (waits per cell, per time bin) beside the map and optionally on
+  it, and a chart of tasks delivered over time.
+
+What the page reads is described in :mod:`rtaw_marl.viz.episode_data`. ``window.rtawView``
+exposes the view's state and a few controls, which the browser tests drive.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.mapf.schedule import Schedule
+from rtaw_marl.utils.atomic import atomic_write
+from rtaw_marl.viz.episode_data import encode, episode_arrays, layout_cells, pack
+
+__all__ = ["ViewEpisode", "page", "write_view"]
+
+MAX_EPISODES = 2
+"""Episodes a page shows side by side."""
+
+
+@dataclass(frozen=True)
+class ViewEpisode:
+    """One episode to show.
+
+    Attributes:
+        name: Its label (the policy).
+        schedule: The executed episode.
+        summary: Numbers shown with it (``{"TTD": 1234.0}``).
+    """
+
+    name: str
+    schedule: Schedule
+    summary: dict[str, Any] = field(default_factory=dict)
+
+
+def _asset(name: str) -> str:
+    return resources.files("rtaw_marl.viz").joinpath("viewer", name).read_text(encoding="utf-8")
+
+
+def page(
+    layout: Layout,
+    episodes: Sequence[ViewEpisode],
+    title: str,
+    progress: Callable[[str], None] | None = None,
+) -> str:
+    """The viewer's HTML for ``episodes`` (one or two) on ``layout``.
+
+    Raises:
+        ConfigError: No episode or more than :data:`MAX_EPISODES`, or episodes whose
+            robot counts differ (side by side they share one map and one clock).
+    """
+    if not 1 <= len(episodes) <= MAX_EPISODES:
+        raise ConfigError(f"the viewer shows 1 or {MAX_EPISODES} episodes, got {len(episodes)}")
+    if len({ep.schedule.num_robots for ep in episodes}) > 1:
+        raise ConfigError("episodes side by side must have the same number of robots")
+    note = progress or (lambda _: None)
+    packed = []
+    for ep in episodes:
+        note(f"packing {ep.name}: {ep.schedule.num_robots} robots, {ep.schedule.horizon} timesteps")
+        arrays = episode_arrays(layout, ep.schedule)
+        packed.append(pack(arrays, ep.name, ep.summary))
+    data = {
+        "version": 1,
+        "title": title,
+        "width": layout.width,
+        "height": layout.height,
+        "cells": encode(layout_cells(layout)),
+        "episodes": packed,
+    }
+    # "</" cannot end the inline script early once "<" is escaped (base64 has none).
+    text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
+    return (
+        _asset("page.html")
+        .replace("__TITLE__", html.escape(title))
+        .replace("__STYLE__", _asset("viewer.css"))
+        .replace("__SCRIPT__", _asset("viewer.js"))
+        .replace("__DATA__", text)
+    )
+
+
+def write_view(
+    path: str | Path,
+    layout: Layout,
+    episodes: Sequence[ViewEpisode],
+    title: str,
+    progress: Callable[[str], None] | None = None,
+) -> Path:
+    """:func:`page` written atomically to ``path`` (an ``.html`` file)."""
+    text = page(layout, episodes, title, progress)
+    if progress is not None:
+        progress(f"writing {path} ({len(text) / 1e6:.1f} MB)")
+    return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
