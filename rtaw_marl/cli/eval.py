@@ -15,11 +15,20 @@ the progress bar counts the decisions still to run and shows the time left. Ctrl
 SIGTERM stops with one line saying how many finished episodes the journal keeps (exit
 130 or 143); the same command with ``resume=true`` continues. The journal matches
 episodes by the contents of the files they depend on (map, task file, checkpoints).
+
+The report (the layout line, the tables, notes) goes to stdout and is saved as
+``<stem>.txt`` beside ``results.json`` (``results.txt``); progress goes to stderr: the
+bar only when stderr is a terminal, the ``estimated time`` line always. So
+``rtaw-eval ... > table.txt`` is a clean table file. ``s/episode`` is each policy's
+mean wall time per episode after an untimed warm-up of a few decisions
+(:data:`~rtaw_marl.evaluation.evaluate.WARM_UP_DECISIONS`), so one-time compilation
+is charged to no policy.
 """
 
 from __future__ import annotations
 
 import signal
+import sys
 import time
 from collections.abc import Mapping
 from pathlib import Path
@@ -51,6 +60,7 @@ from rtaw_marl.evaluation.journal import (
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
 from rtaw_marl.evaluation.throughput import throughput_table
+from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcript_path
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import seed_list
@@ -81,13 +91,19 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
     output = Path(cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json")
     # Checked and held before any work, so a bad path does not cost a whole evaluation
     # and two runs never write the same results.
-    with claim_file(output, siblings=(journal_path(output).name,)):
-        return _evaluate(cfg, names, seeds, output)
+    siblings = (journal_path(output).name, transcript_path(output).name)
+    with claim_file(output, siblings=siblings):
+        report = Transcript()
+        payload = _evaluate(cfg, names, seeds, output, report)
+        report.save(transcript_path(output))
+        return payload
 
 
-def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path) -> dict:
+def _evaluate(
+    cfg: EvalConfig, names: list[str], seeds: list[int], output: Path, report: Transcript
+) -> dict:
     sim = build_sim(cfg.sim_spec())
-    print(f"layout {sim.layout.describe()}")
+    report.print(f"layout {sim.layout.describe()}")
     names = policy_names(names)
     policies = policies_from_cfg(cfg, names, sim)
     if cfg.compare_to is not None and cfg.compare_to not in policies:
@@ -95,7 +111,7 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
             f"compare_to={cfg.compare_to} is not an evaluated policy; "
             f"evaluated: {', '.join(policies)}"
         )
-    journal = _journal(cfg, names, output, policies)
+    journal = _journal(cfg, names, output, policies, report)
     todo = sum(journal.get(name, seed) is None for name in policies for seed in seeds)
     try:
         # smoothing=0: the bar's ETA is the run's average rate, not the last policy's.
@@ -103,11 +119,11 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
             # A horizon episode's decisions are known only at its end (num_tasks bounds them).
             total=None if sim.config.episode_mode == "horizon" else todo * sim.config.num_tasks,
             unit="dec",
-            disable=not cfg.progress,
+            disable=not progress_shown(cfg.progress),
             leave=False,
             smoothing=0,
         ) as bar:
-            estimate = TimeEstimate(announce=tqdm.write, show=bar.set_postfix_str)
+            estimate = TimeEstimate(announce=_to_stderr, show=bar.set_postfix_str)
             results = evaluate(
                 sim, policies, seeds, on_decisions=bar.update, journal=journal, on_seed=estimate
             )
@@ -115,10 +131,10 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
         raise _interrupted(exc, journal) from None
     finally:
         journal.close()
-    bound, bound_time = _lower_bound(cfg, sim, seeds, results)
-    print(format_table(results, REFERENCE, lower_bound=bound, compare_to=cfg.compare_to))
+    bound, bound_time = _lower_bound(cfg, sim, seeds, results, report)
+    report.print(format_table(results, REFERENCE, lower_bound=bound, compare_to=cfg.compare_to))
     if sim.config.episode_mode == "horizon":
-        print(
+        report.print(
             throughput_table(
                 results, sim.num_robots, int(sim.config.horizon or 0), (REFERENCE, cfg.compare_to)
             )
@@ -132,12 +148,21 @@ def _evaluate(cfg: EvalConfig, names: list[str], seeds: list[int], output: Path)
         "comparisons": comparisons(results, REFERENCE, compare_to=cfg.compare_to),
     }
     path = write_json_atomic(output, payload)
-    print(f"results: {path}")
+    report.print(f"results: {path}")
     return payload
 
 
+def _to_stderr(line: str) -> None:
+    """A progress note (the time estimate): on stderr, above the bar if one is drawn."""
+    tqdm.write(line, file=sys.stderr)
+
+
 def _journal(
-    cfg: EvalConfig, names: list[str], output: Path, policies: Mapping[str, object]
+    cfg: EvalConfig,
+    names: list[str],
+    output: Path,
+    policies: Mapping[str, object],
+    report: Transcript,
 ) -> EpisodeJournal:
     """The episode journal beside ``output``: the setting with its input files as
     contents hashes, each learned policy's episodes keyed by its file's hash."""
@@ -145,10 +170,10 @@ def _journal(
     sources = {label: file_digest(path) for label, path in learned_files(cfg, names).items()}
     journal = EpisodeJournal(journal_path(output), setting, resume=cfg.resume, sources=sources)
     if journal.episodes:
-        print(f"resume: {len(journal.episodes)} finished episodes from {journal.path}")
+        report.print(f"resume: {len(journal.episodes)} finished episodes from {journal.path}")
     for policy, (count, _) in journal.stale.items():
         if policy in policies:
-            print(
+            report.print(
                 f"resume: the file of {policy} has changed since {count} of its episodes "
                 "were journalled (another sha256): they run again"
             )
@@ -168,19 +193,19 @@ def _interrupted(exc: KeyboardInterrupt, journal: EpisodeJournal) -> Interrupted
 
 
 def _lower_bound(
-    cfg: EvalConfig, sim: WarehouseSim, seeds: list[int], results: dict
+    cfg: EvalConfig, sim: WarehouseSim, seeds: list[int], results: dict, report: Transcript
 ) -> tuple[list[float] | None, float | None]:
     """The TTD lower bound per seed and its cost, on request (drain mode only); adds
     each policy's ``gap_pct`` to ``results``."""
     if not cfg.lower_bound:
         return None, None
     if sim.config.episode_mode != "drain":
-        print("lower bound: skipped (drain mode only)")
+        report.print("lower bound: skipped (drain mode only)")
         return None, None
     start = time.perf_counter()
     bound = [ttd_lower_bound(sim, seed) for seed in seeds]
     bound_time = time.perf_counter() - start
-    print(f"lower bound: {bound_time:.1f} s")
+    report.print(f"lower bound: {bound_time:.1f} s")
     for metrics in results.values():
         metrics["gap_pct"] = gap_to_bound(metrics["ttd"], bound)
     return bound, bound_time

@@ -6,6 +6,9 @@ Examples::
     rtaw-study study=table1_paper seeds=[0,1,2] output=runs/t1
     rtaw-study study=table1_paper output=runs/t1 resume=true   # after a kill
     rtaw-study study=table1_paper docs=docs reuse=true write=true workers=2   # docs/results.md
+
+The tables go to stdout and are saved as ``<study>.txt`` beside ``<study>.json`` in the
+run folder; progress lines go to stderr.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from rtaw_marl.evaluation.study import (
     run_study,
     save_result,
 )
+from rtaw_marl.evaluation.transcript import Transcript, transcript_path
 from rtaw_marl.utils.runs import claim_file
 
 
@@ -45,14 +49,16 @@ def run(cfg: DictConfig | StudyConfig) -> StudyResult:
         result = run_study(study, seeds, output, cfg.workers, cfg.resume, reuse, cfg.reuse_learned)
         save_result(path, result)
     body = study.render(result, stored)
-    print(body)
-    print(f"results: {path}")
+    report = Transcript()
+    report.print(body)
+    report.print(f"results: {path}")
     if cfg.write:
         if study.store:
             save_result(docs / "data" / f"{study.name}.json", result)
         if study.page is not None:
             replace_section(docs / study.page, study.name, body)
-            print(f"rewrote the {study.name} section of {docs / study.page}")
+            report.print(f"rewrote the {study.name} section of {docs / study.page}")
+    report.save(transcript_path(path))
     return result
 
 

@@ -305,12 +305,16 @@ def test_a_long_evaluation_prints_its_estimated_time_and_the_bar_carries_it(
         eval_cli, "TimeEstimate", functools.partial(TimeEstimate, clock=readings.__next__)
     )
     monkeypatch.setattr(eval_cli, "tqdm", _Recorded)
+    # As on a terminal: the bar is drawn only there.
+    monkeypatch.setattr(eval_cli, "progress_shown", lambda requested, stream=None: requested)
     _Recorded.made.clear()
     out = tmp_path / "res.json"
     args = ["env.num_tasks=30", "policy=[mpdm,rbts]", "seeds=[0,1,2,3,4]", f"output={out}"]
     result = cli("eval", *args)
     assert result.code == 0, result.err
-    lines = [line for line in result.out.splitlines() if line.startswith("estimated time")]
+    # A progress note: on stderr, out of the report (stdout, results.txt).
+    lines = [line for line in result.err.splitlines() if line.startswith("estimated time")]
+    assert "estimated time" not in result.out
     assert lines == ["estimated time: 2.5 min in all, 2.0 min left (30 s per seed, 5 seeds to run)"]
     (bar,) = _Recorded.made
     assert (bar.total, bar.n, bar.kwargs["smoothing"]) == (10 * 30, 10 * 30, 0)
@@ -325,4 +329,4 @@ def test_a_long_evaluation_prints_its_estimated_time_and_the_bar_carries_it(
 def test_a_short_evaluation_prints_no_estimate(cli, tmp_path: Path) -> None:
     result = cli("eval", *QUICK, "policy=[mpdm]", "seeds=[0,1,2]", f"output={tmp_path / 'r.json'}")
     assert result.code == 0, result.err
-    assert "estimated time" not in result.out
+    assert "estimated time" not in result.out + result.err

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
 from rtaw_marl.evaluation import evaluate
-from rtaw_marl.evaluation.evaluate import TimeEstimate, duration
+from rtaw_marl.evaluation.evaluate import TimeEstimate, duration, warm_up
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
@@ -73,7 +75,8 @@ def test_episodes_run_seed_by_seed_and_on_seed_counts_the_seeds_run(tmp_path) ->
     log: list[tuple[str, int]] = []
     policies = {n: _Order(n, log) for n in ("a", "b")}
     journal = EpisodeJournal(tmp_path / "j.jsonl", {}, resume=False)
-    first = evaluate(sim, policies, [3, 1], journal=journal)
+    # No warm-up: it would log resets of its own (tested below).
+    first = evaluate(sim, policies, [3, 1], journal=journal, warm_up_decisions=0)
     assert log == [("a", 3), ("b", 3), ("a", 1), ("b", 1)]
     journal.close()
     journal = EpisodeJournal(tmp_path / "j.jsonl", {}, resume=True)
@@ -84,7 +87,12 @@ def test_episodes_run_seed_by_seed_and_on_seed_counts_the_seeds_run(tmp_path) ->
         calls.append((done, total))
 
     again = evaluate(
-        sim, policies, [3, 1, 2, 0], journal=journal, on_seed=lambda *c: calls.append(c)
+        sim,
+        policies,
+        [3, 1, 2, 0],
+        journal=journal,
+        on_seed=lambda *c: calls.append(c),
+        warm_up_decisions=0,
     )
     assert log == [("a", 2), ("b", 2), ("a", 0), ("b", 0)]
     assert calls == [(1, 2), (2, 2)]
@@ -145,3 +153,77 @@ def test_time_estimate_is_silent_for_a_short_run() -> None:
 )  # fmt: skip
 def test_duration(seconds: float, text: str) -> None:
     assert duration(seconds) == text
+
+
+class _FakeTime:
+    """A ``time`` module whose clock moves only when a policy says so."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def perf_counter(self) -> float:
+        return self.now
+
+    def monotonic(self) -> float:
+        return self.now
+
+
+class _Compiling:
+    """A policy whose decisions cost 1 fake second each, plus a one-time 100 s the first
+    time any policy decides (like numba kernels shared by every policy)."""
+
+    def __init__(self, clock: _FakeTime, compiled: list[bool]) -> None:
+        self.clock, self.compiled, self.inner = clock, compiled, make_baseline("mpdm")
+
+    def reset(self, seed: int | None = None) -> None:
+        self.inner.reset(seed)
+
+    def act_sim(self, sim) -> int:
+        if not self.compiled:
+            self.compiled.append(True)
+            self.clock.now += 100.0
+        self.clock.now += 1.0
+        return self.inner.act_sim(sim)
+
+
+def _timed(monkeypatch, order: list[str], **kwargs) -> tuple[dict, int]:
+    """``evaluate`` of policies in ``order`` under a fake clock; the results and the
+    decisions reported to the progress callback."""
+    # The package's ``evaluate`` attribute is the function: the module by its name.
+    module = importlib.import_module("rtaw_marl.evaluation.evaluate")
+    clock, compiled = _FakeTime(), []
+    monkeypatch.setattr(module, "time", clock)
+    sim = build_sim(SimSpec.of({**ENV, "num_tasks": 20}))
+    counted: list[int] = []
+    policies = {name: _Compiling(clock, compiled) for name in order}
+    results = evaluate(sim, policies, [0, 1], on_decisions=counted.append, **kwargs)
+    return results, sum(counted)
+
+
+def test_s_per_episode_excludes_one_time_compilation_whatever_the_order(monkeypatch) -> None:
+    """Each policy warms up before its first timed episode: every episode's wall time is
+    its decisions' cost, in either order; the warm-up's decisions are not counted as
+    progress and do not change the outcomes."""
+    by_order = {}
+    for order in (["a", "b"], ["b", "a"]):
+        results, counted = _timed(monkeypatch, order)
+        for metrics in results.values():
+            assert metrics["wall_time_s"] == [float(d) for d in metrics["decisions"]]
+        assert counted == sum(sum(m["decisions"]) for m in results.values())
+        by_order[tuple(order)] = results
+    assert by_order[("a", "b")]["a"]["ttd"] == by_order[("b", "a")]["a"]["ttd"]
+    cold, _ = _timed(monkeypatch, ["a", "b"], warm_up_decisions=0)
+    assert cold["a"]["ttd"] == by_order[("a", "b")]["a"]["ttd"]
+    # Without the warm-up the first policy's first episode pays the 100 s.
+    assert cold["a"]["wall_time_s"][0] == cold["a"]["decisions"][0] + 100.0
+    assert cold["b"]["wall_time_s"][0] == cold["b"]["decisions"][0]
+
+
+def test_warm_up_plays_at_most_its_decisions_and_leaves_the_episode_unchanged() -> None:
+    sim = build_sim(SimSpec.of({**ENV, "num_tasks": 20}))
+    policy = make_baseline("mpdm")
+    assert warm_up(sim, policy, 0, 5) == 5
+    assert warm_up(sim, policy, 0, 10_000) == sim.metrics().decisions
+    warmed = evaluate(sim, {"mpdm": policy}, [0])["mpdm"]["ttd"]
+    cold = evaluate(sim, {"mpdm": policy}, [0], warm_up_decisions=0)["mpdm"]["ttd"]
+    assert warmed == cold
