@@ -52,6 +52,7 @@ from rtaw_marl.evaluation import comparisons, evaluate, format_table, write_json
 from rtaw_marl.evaluation.config import EvalConfig
 from rtaw_marl.evaluation.evaluate import TimeEstimate
 from rtaw_marl.evaluation.journal import (
+    NOT_SETTING,
     EpisodeJournal,
     file_digest,
     journal_path,
@@ -69,14 +70,6 @@ from rtaw_marl.utils.signals import Interrupted
 
 #: The main baseline every policy is compared with (when it is evaluated).
 REFERENCE = "mpdm"
-
-
-#: Options that do not change an episode's outcome: a resumed evaluation may differ in
-#: them (policies and seeds are matched episode by episode).
-_NOT_SETTING = (
-    "policy", "checkpoint", "pretrained", "seeds", "compare_to", "lower_bound", "output",
-    "resume", "progress", "torch_threads",
-)  # fmt: skip
 
 
 @exit_on_user_error
@@ -166,7 +159,7 @@ def _journal(
 ) -> EpisodeJournal:
     """The episode journal beside ``output``: the setting with its input files as
     contents hashes, each learned policy's episodes keyed by its file's hash."""
-    setting = with_file_digests({k: v for k, v in as_plain(cfg).items() if k not in _NOT_SETTING})
+    setting = with_file_digests({k: v for k, v in as_plain(cfg).items() if k not in NOT_SETTING})
     sources = {label: file_digest(path) for label, path in learned_files(cfg, names).items()}
     journal = EpisodeJournal(journal_path(output), setting, resume=cfg.resume, sources=sources)
     if journal.episodes:

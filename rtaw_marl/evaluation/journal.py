@@ -29,7 +29,22 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.utils.atomic import disk_full_guard
 
-__all__ = ["FORMAT", "EpisodeJournal", "file_digest", "journal_path", "with_file_digests"]
+__all__ = [
+    "FORMAT",
+    "NOT_SETTING",
+    "EpisodeJournal",
+    "file_digest",
+    "journal_path",
+    "with_file_digests",
+]
+
+#: ``rtaw-eval`` options that do not change an episode's outcome: a resumed evaluation
+#: may differ in them (policies and seeds are matched episode by episode), and
+#: ``rtaw-results`` does not tell settings apart by them.
+NOT_SETTING = (
+    "policy", "checkpoint", "pretrained", "seeds", "compare_to", "lower_bound", "output",
+    "resume", "progress", "torch_threads",
+)  # fmt: skip
 
 FORMAT = "rtaw_marl.episodes/2"
 #: The first format: episodes keyed by file paths (a replaced file was replayed).

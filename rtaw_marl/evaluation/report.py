@@ -22,13 +22,16 @@ from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = [
     "HINDSIGHT",
+    "baseline_label",
     "comparisons",
     "diff_cell",
     "format_table",
     "gap_to_bound",
     "improvement",
     "json_safe",
+    "legend",
     "markdown_table",
+    "mean_ci_cell",
     "write_json_atomic",
 ]
 
@@ -119,12 +122,14 @@ def comparisons(
     return out
 
 
-def _label(name: str) -> str:
+def baseline_label(name: str) -> str:
     """A baseline's name in a column header: MPDM, RBTS; other names as they are."""
     return name.upper() if name.isalpha() else name
 
 
-def _mean_ci(values: Sequence[float], confidence: float) -> str:
+def mean_ci_cell(values: Sequence[float], confidence: float) -> str:
+    """``12.34 ± 0.56``: the mean and the half-width of its t-interval (the mean alone
+    for one value)."""
     mean, half = mean_ci(values, confidence)
     return f"{mean:.2f}" if half is None else f"{mean:.2f} ± {half:.2f}"
 
@@ -148,9 +153,10 @@ def _share_cell(share: HindsightShare | None) -> str:
     return f"{100 * share.share:.0f}% [{100 * share.low:.0f}, {100 * share.high:.0f}]"
 
 
-def _legend(
+def legend(
     n: int, confidence: float, baselines: list[str], with_share: bool, reference: str
 ) -> str:
+    """The one-line legend under a table of ``n`` seeds compared with ``baselines``."""
     level = f"{100 * confidence:g}%"
     if n < 2:
         parts = ["1 seed: no intervals (run 2+ seeds)"]
@@ -162,7 +168,8 @@ def _legend(
             parts.append("* = interval excludes 0")
     if with_share:
         parts.append(
-            f"hindsight share: part of hindsight's TTD gain over {_label(reference)} reached"
+            "hindsight share: part of hindsight's TTD gain over "
+            f"{baseline_label(reference)} reached"
         )
     return "; ".join(parts)
 
@@ -208,14 +215,14 @@ def format_table(
         f"max wait ± {level}",
         "s/episode",
     ]
-    header += [f"TTD vs {_label(base)}" for base in baselines]
+    header += [f"TTD vs {baseline_label(base)}" for base in baselines]
     if with_share:
         header.append("hindsight share")
     if lower_bound is not None:
         header.append("gap to bound")
     rows = []
     if lower_bound is not None:
-        bound_row = ["lower bound", _mean_ci(lower_bound, confidence)]
+        bound_row = ["lower bound", mean_ci_cell(lower_bound, confidence)]
         rows.append(bound_row + [""] * (len(header) - len(bound_row)))
     for name, metrics in results.items():
         label = (
@@ -223,9 +230,9 @@ def format_table(
         )
         row = [
             label,
-            _mean_ci(metrics["ttd"], confidence),
-            _mean_ci(metrics["makespan"], confidence),
-            _mean_ci(metrics["wait_max"], confidence),
+            mean_ci_cell(metrics["ttd"], confidence),
+            mean_ci_cell(metrics["makespan"], confidence),
+            mean_ci_cell(metrics["wait_max"], confidence),
             f"{np.mean(metrics['wall_time_s']):.3f}",
         ]
         entry = compared[name]
@@ -237,8 +244,8 @@ def format_table(
             row.append(f"{np.mean(gap_to_bound(metrics['ttd'], lower_bound)):.1f}%")
         rows.append(row)
     n = min((len(m["ttd"]) for m in results.values()), default=0)
-    legend = _legend(n, confidence, baselines, with_share, reference)
-    return markdown_table(header, rows) + "\n" + legend
+    note = legend(n, confidence, baselines, with_share, reference)
+    return markdown_table(header, rows) + "\n" + note
 
 
 def markdown_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
