@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format bench clean lorr-kit
+.PHONY: demo test lint format bench clean lorr-kit browser
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
@@ -37,7 +37,19 @@ demo: $(STAMP)
 lorr-kit: $(STAMP)
 	$(BIN)/python -m rtaw_marl.integrations.lorr.kit
 
-test: $(STAMP) lorr-kit
+# Headless Chromium and its driver (Debian's packages) for the viewer's browser tests
+# (tests/viz/test_view_browser.py): installed with apt-get when missing and root.
+browser:
+	@if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then \
+		if [ "$$(id -u)" != 0 ]; then \
+			echo "error: the browser tests need Debian's chromium and chromium-driver:" \
+				"sudo apt-get install chromium chromium-driver" >&2; exit 2; fi; \
+		export DEBIAN_FRONTEND=noninteractive; \
+		apt-get install -y -qq chromium chromium-driver >/dev/null || \
+			{ apt-get update -qq && apt-get install -y -qq chromium chromium-driver >/dev/null; }; \
+	fi
+
+test: $(STAMP) lorr-kit browser
 	$(BIN)/ruff check rtaw_marl tests experiments
 	$(BIN)/ruff format --check rtaw_marl tests experiments
 	$(BIN)/python -m pytest -n 2 -q

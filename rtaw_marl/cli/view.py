@@ -28,6 +28,7 @@ from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import ViewConfig
 from rtaw_marl.evaluation.evaluate import SimPolicy, run_episode
+from rtaw_marl.evaluation.transcript import progress_shown
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.mapf.conflicts import check_schedule
@@ -43,20 +44,46 @@ def _as_list(value: object) -> list[str]:
     return [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
 
 
+class _Progress:
+    """A tqdm bar on a terminal; else a line on stderr at every tenth of the episode."""
+
+    def __init__(self, name: str, total: int, unit: str) -> None:
+        self.name, self.total, self.unit, self.done, self.start = name, total, unit, 0, time.time()
+        self.bar = (
+            tqdm(total=total, desc=f"playing {name}", unit=unit, file=sys.stderr)
+            if progress_shown(True)
+            else None
+        )
+
+    def to(self, done: int) -> None:
+        done = min(done, self.total)
+        if self.bar is not None:
+            self.bar.update(done - self.bar.n)
+        elif done * 10 // max(self.total, 1) > self.done * 10 // max(self.total, 1):
+            _note(
+                f"playing {self.name}: {done}/{self.total} {self.unit}s "
+                f"({time.time() - self.start:.0f} s)"
+            )
+        self.done = done
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpisode:
-    """One episode with a progress bar on stderr (timesteps for horizon episodes)."""
+    """One episode with progress on stderr (timesteps for horizon episodes)."""
     horizon = sim.config.horizon if sim.config.episode_mode == "horizon" else None
     total = horizon if horizon is not None else sim.config.num_tasks
-    unit = "timestep" if horizon is not None else "decision"
+    progress = _Progress(name, total, "timestep" if horizon is not None else "decision")
     start = time.perf_counter()
-    with tqdm(total=total, desc=f"playing {name}", unit=unit, file=sys.stderr) as bar:
 
-        def advance(decisions: int) -> None:
-            bar.update(min(int(sim.time), total) - bar.n if horizon is not None else decisions)
+    def advance(decisions: int) -> None:
+        progress.to(int(sim.time) if horizon is not None else progress.done + decisions)
 
-        metrics = run_episode(sim, policy, seed, on_decisions=advance)
-        if horizon is not None:
-            bar.update(total - bar.n)
+    metrics = run_episode(sim, policy, seed, on_decisions=advance)
+    progress.to(total)
+    progress.close()
     _note(f"{name}: played in {time.perf_counter() - start:.1f} s; checking the schedule")
     schedule = sim.schedule()
     check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
@@ -71,9 +98,13 @@ def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpi
 def _saved(cfg: ViewConfig) -> tuple[object, list[ViewEpisode]]:
     from rtaw_marl.integrations.lorr.output import read_schedule
 
+    paths = _as_list(cfg.schedule)
+    for path in paths:
+        if not Path(path).is_file():
+            raise ConfigError(f"schedule={path}: no such file (a LoRR output file)")
     layout = cfg.sim_spec().layout.build()
     episodes = []
-    for path in _as_list(cfg.schedule):
+    for path in paths:
         _note(f"replaying and checking {path}")
         schedule = read_schedule(path, layout)
         finished = int((schedule.task_delivered <= schedule.horizon).sum())

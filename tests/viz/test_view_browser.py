@@ -170,12 +170,15 @@ def test_search_finds_and_follows(page: Any, episodes: Any) -> None:
     assert "no robot 99 (robots 0-11)" in _state(page)["info"]
 
 
-@pytest.mark.parametrize("t", [0, 15, 40])
-def test_robots_drawn_where_the_schedule_puts_them(page: Any, episodes: Any, t: int) -> None:
+@pytest.mark.parametrize(("t", "scale"), [(0, 7), (15, 7), (40, 7), (15, 3), (40, 3)])
+def test_robots_drawn_where_the_schedule_puts_them(
+    page: Any, episodes: Any, t: int, scale: int
+) -> None:
+    """Zoomed in (7 pixels a cell: rectangles) and out (3: one image, a pixel a cell)."""
     _, schedules = episodes
     page.execute_script("window.rtawView.pause(); document.getElementById('search').blur()")
     page.find_element("tag name", "body").send_keys("\ue00c")  # Escape: no selection ring
-    page.execute_script(f"window.rtawView.setCamera(7, 4, 24); window.rtawView.seek({t})")
+    page.execute_script(f"window.rtawView.setCamera({scale}, 4, 24); window.rtawView.seek({t})")
     shot = np.asarray(Image.open(io.BytesIO(page.get_screenshot_as_png())).convert("RGB"))
     for panel, name in enumerate(POLICIES):
         schedule = schedules[name]

@@ -13,6 +13,10 @@ const IDLE = 0, TO_PICKUP = 1, CARRYING = 2;
 const STATE_NAMES = ["idle", "to pickup", "carrying"];
 const STATE_COLORS = ["#8c8c8c", "#1f6fd1", "#e8710a"];
 const CELL_COLORS = [[242, 242, 242], [58, 63, 75], [204, 236, 204], [252, 222, 190]];
+// Below this many pixels per cell, robots are drawn as pixels of a grid-sized image.
+const PIXEL_MODE = 4;
+const rgba32 = (hex) => { const v = parseInt(hex.slice(1), 16); return (0xff << 24 | (v & 0xff) << 16 | (v & 0xff00) | (v >> 16)) >>> 0; };
+const STATE_PIXELS = Uint32Array.from(STATE_COLORS, rgba32);
 const TYPES = { uint8: Uint8Array, uint16: Uint16Array, uint32: Uint32Array, int32: Int32Array };
 
 async function decode(a) {
@@ -208,12 +212,42 @@ function drawPanel(panel, frac) {
   ctx.fillRect(0, 0, panel.canvas.width, panel.canvas.height);
   ctx.setTransform(dpr * s, 0, 0, dpr * s, dpr * view.offX, dpr * view.offY);
   ctx.imageSmoothingEnabled = false;
-  ctx.drawImage(view.map, 0, 0);
+  if (s < PIXEL_MODE) drawRobotPixels(panel, frac);
+  else drawRobotRects(panel, frac);
   if (view.heat) ctx.drawImage(panel.heat, 0, 0);
-  // Only robots in view are drawn; one path per state colour.
+  if (view.selected >= 0 && view.selected < ep.M) drawSelected(panel, frac);
+  panel.label.textContent = `${ep.name}: ${ep.finishedBefore[ep.at + 1]} tasks delivered by t = ${ep.at}`;
+}
+
+// Zoomed out, a robot is a cell's pixel of one image the size of the grid, scaled up
+// once: one blit instead of thousands of rectangles (software rasterizers choke on those).
+function drawRobotPixels(panel, frac) {
+  const ep = panel.ep, W = view.W, H = view.H;
+  if (!panel.pixels) {
+    panel.pixelCanvas = document.createElement("canvas");
+    panel.pixelCanvas.width = W; panel.pixelCanvas.height = H;
+    panel.image = panel.pixelCanvas.getContext("2d").createImageData(W, H);
+    panel.pixels = new Uint32Array(panel.image.data.buffer);
+  }
+  const px = panel.pixels;
+  px.set(view.mapPixels);
+  for (let m = 0; m < ep.M; m++) {
+    const [x, y] = drawnXY(ep, m, frac);
+    const cx = Math.round(x), cy = Math.round(y);
+    if (cx >= 0 && cx < W && cy >= 0 && cy < H) px[cy * W + cx] = STATE_PIXELS[ep.state[m]];
+  }
+  panel.pixelCanvas.getContext("2d").putImageData(panel.image, 0, 0);
+  panel.ctx.drawImage(panel.pixelCanvas, 0, 0);
+}
+
+// Zoomed in: the map, then robots in view as rectangles that glide between cells, one
+// path per state colour.
+function drawRobotRects(panel, frac) {
+  const ep = panel.ep, ctx = panel.ctx, s = view.scale, dpr = window.devicePixelRatio || 1;
+  ctx.drawImage(view.map, 0, 0);
   const x0 = -view.offX / s - 1, y0 = -view.offY / s - 1;
   const x1 = x0 + panel.canvas.width / dpr / s + 2, y1 = y0 + panel.canvas.height / dpr / s + 2;
-  const pad = s >= 4 ? 0.12 : 0;
+  const pad = 0.12;
   for (let st = 0; st < 3; st++) {
     ctx.beginPath();
     for (let m = 0; m < ep.M; m++) {
@@ -225,8 +259,6 @@ function drawPanel(panel, frac) {
     ctx.fillStyle = STATE_COLORS[st];
     ctx.fill();
   }
-  if (view.selected >= 0 && view.selected < ep.M) drawSelected(panel, frac);
-  panel.label.textContent = `${ep.name}: ${ep.finishedBefore[ep.at + 1]} tasks delivered by t = ${ep.at}`;
 }
 
 function drawSelected(panel, frac) {
@@ -259,17 +291,22 @@ function drawSelected(panel, frac) {
   ctx.stroke();
 }
 
-function drawThroughput() {
-  const c = el("throughput"), ctx = c.getContext("2d");
-  const T = Math.max(...view.episodes.map((e) => e.T));
-  const bin = Math.max(1, Math.ceil((T + 1) / 150));
-  el("tp-bin").textContent = String(bin);
+// Tasks delivered per bin of timesteps, per episode: computed once.
+function throughputSeries() {
+  const T = view.T, bin = Math.max(1, Math.ceil((T + 1) / 150));
   const series = view.episodes.map((ep) => {
     const out = new Float64Array(Math.ceil((T + 1) / bin));
     for (let t = 0; t <= ep.T; t++) out[Math.floor(t / bin)] += ep.delivered[t];
     return out;
   });
-  const top = Math.max(1, ...series.map((s) => Math.max(...s)));
+  el("tp-bin").textContent = String(bin);
+  return { bin, series, top: Math.max(1, ...series.map((s) => Math.max(...s))) };
+}
+
+function drawThroughput() {
+  const c = el("throughput"), ctx = c.getContext("2d"), T = view.T;
+  if (!view.throughput) view.throughput = throughputSeries();
+  const { bin, series, top } = view.throughput;
   ctx.clearRect(0, 0, c.width, c.height);
   ctx.font = "10px sans-serif";
   const colors = ["#1f6fd1", "#d0021b"];
@@ -464,6 +501,7 @@ async function main() {
   el("title").textContent = data.title;
   view.cells = await decode(data.cells);
   view.map = mapCanvas(view.cells);
+  view.mapPixels = new Uint32Array(view.map.getContext("2d").getImageData(0, 0, view.W, view.H).data.buffer);
   for (const meta of data.episodes) {
     const arrays = {};
     for (const key of ["start", "moves", "tasks", "congestion", "delivered"]) arrays[key] = await decode(meta[key]);

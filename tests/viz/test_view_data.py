@@ -1,0 +1,156 @@
+"""The viewer's data: move codes, congestion, throughput, the page, and saved schedules
+(LoRR output files) read back into the same episode."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.integrations.lorr.output import read_schedule, write_episode
+from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.mapf.schedule import Schedule
+from rtaw_marl.viz.episode_data import MOVES, episode_arrays, layout_cells, move_codes
+from rtaw_marl.viz.view import ViewEpisode, page, write_view
+
+
+@pytest.fixture
+def layout() -> Layout:
+    grid = np.zeros((4, 6), dtype=bool)
+    grid[3, 5] = True
+    pickup = np.zeros_like(grid)
+    pickup[0, 0] = True
+    return Layout(grid, name="tiny", pickup=pickup)
+
+
+@pytest.fixture
+def schedule() -> Schedule:
+    """Robot 0 goes right along row 0 with one wait; robot 1 waits twice then goes down.
+
+    Task 0 (robot 0): assigned 0, pickup 2, delivered 5. Task 1 (robot 1): assigned 1,
+    pickup 1, delivered 4.
+    """
+    r0 = [(0, 0), (1, 0), (2, 0), (2, 0), (3, 0), (4, 0)]
+    r1 = [(5, 0), (5, 0), (5, 0), (5, 1), (5, 2), (5, 2)]
+    return Schedule(
+        positions=np.array([r0, r1], dtype=np.int64).transpose(1, 0, 2),
+        tasks=np.array([[2, 0, 4, 0], [5, 0, 5, 2]], dtype=np.int64),
+        task_robot=np.array([0, 1]),
+        task_arrival=np.array([0, 0]),
+        task_assigned=np.array([0, 1]),
+        task_pickup=np.array([2, 1]),
+        task_delivered=np.array([5, 4]),
+    )
+
+
+def test_move_codes_rebuild_positions(schedule: Schedule) -> None:
+    codes = move_codes(schedule.positions)
+    assert codes[:, 0].tolist() == [1, 1, 0, 1, 1]
+    assert codes[:, 1].tolist() == [0, 0, 3, 3, 0]
+    steps = np.array(MOVES)[codes]  # [T, M, 2]
+    rebuilt = schedule.positions[0] + np.concatenate([np.zeros((1, 2, 2)), steps.cumsum(0)])
+    assert np.array_equal(rebuilt, schedule.positions)
+
+
+def test_a_jump_is_refused(schedule: Schedule) -> None:
+    jumped = schedule.positions.copy()
+    jumped[3, 1] = (2, 3)
+    with pytest.raises(ConfigError, match="robot 1 moves more than one cell at timestep 2"):
+        move_codes(jumped)
+
+
+def test_congestion_counts_waits_of_robots_with_tasks(layout: Layout, schedule: Schedule) -> None:
+    arrays = episode_arrays(layout, schedule, bins=5)
+    assert arrays.bin_size == 1
+    heat = arrays.congestion.reshape(5, 4, 6)
+    # Robot 0 waits at (2, 0) from t = 2 to 3 (busy). Robot 1 waits at (5, 0) from
+    # t = 0 (idle: not counted) and t = 1 (assigned at 1: counted), and at (5, 2) from
+    # t = 4 (delivered at 4: idle, not counted).
+    assert heat.sum() == 2
+    assert heat[2, 0, 2] == 1
+    assert heat[1, 0, 5] == 1
+    assert arrays.delivered.tolist() == [0, 0, 0, 0, 1, 1]
+    assert arrays.tasks[:, 4].tolist() == [0, 1]  # numbered by assignment time
+    assert layout_cells(layout)[0, 0] == 2
+    assert layout_cells(layout)[3, 5] == 1
+
+
+def test_schedule_off_the_grid_is_refused(layout: Layout, schedule: Schedule) -> None:
+    wide = Layout(np.zeros((4, 5), dtype=bool), name="narrow")
+    with pytest.raises(ConfigError, match="leaves the 5x4 grid of 'narrow'"):
+        episode_arrays(wide, schedule)
+    assert episode_arrays(layout, schedule).moves.shape == (5, 2)
+
+
+def _data(text: str) -> dict:
+    match = re.search(r'<script id="rtaw-data" type="application/json">(.*?)</script>', text, re.S)
+    assert match is not None
+    return json.loads(match.group(1))
+
+
+def _array(entry: dict) -> np.ndarray:
+    raw = zlib.decompress(base64.b64decode(entry["data"]))
+    return np.frombuffer(raw, dtype=entry["dtype"]).reshape(entry["shape"])
+
+
+def test_page_is_self_contained_and_holds_the_episode(layout: Layout, schedule: Schedule) -> None:
+    text = page(layout, [ViewEpisode("a</script>", schedule, {"TTD": 3.0})], "t<i>")
+    assert "<title>t&lt;i&gt;</title>" in text
+    assert not re.search(r"(src|href)=\"?(https?:)?//", text)  # nothing fetched
+    data = _data(text)
+    (ep,) = data["episodes"]
+    assert ep["name"] == "a</script>"
+    assert (data["width"], data["height"]) == (6, 4)
+    assert np.array_equal(_array(ep["moves"]), move_codes(schedule.positions))
+    assert np.array_equal(_array(ep["start"]), schedule.positions[0])
+    assert _array(data["cells"]).reshape(4, 6)[3, 5] == 1
+
+
+def test_page_refuses_three_episodes_and_mixed_fleets(layout: Layout, schedule: Schedule) -> None:
+    one = ViewEpisode("a", schedule)
+    with pytest.raises(ConfigError, match="1 or 2 episodes, got 3"):
+        page(layout, [one] * 3, "x")
+    small = Schedule(
+        schedule.positions[:, :1], schedule.tasks[:1], schedule.task_robot[:1],
+        schedule.task_arrival[:1], schedule.task_assigned[:1], schedule.task_pickup[:1],
+        schedule.task_delivered[:1],
+    )  # fmt: skip
+    with pytest.raises(ConfigError, match="same number of robots"):
+        page(layout, [one, ViewEpisode("b", small)], "x")
+
+
+def test_saved_schedule_round_trip(layout: Layout, schedule: Schedule, tmp_path: Path) -> None:
+    """rtaw-render's LoRR output reads back to the same positions and task times."""
+    path = write_episode(schedule, tmp_path / "episode.json")
+    back = read_schedule(path, layout)
+    assert np.array_equal(back.positions, schedule.positions)
+    order = np.argsort(schedule.task_assigned, kind="stable")
+    assert np.array_equal(back.tasks, schedule.tasks[order])
+    for key in ("task_robot", "task_assigned", "task_pickup", "task_delivered"):
+        assert np.array_equal(getattr(back, key), getattr(schedule, key)[order]), key
+    out = write_view(tmp_path / "v.html", layout, [ViewEpisode("saved", back)], "saved")
+    assert out.stat().st_size > 0
+
+
+def test_saved_schedule_of_an_unfinished_task(
+    layout: Layout, schedule: Schedule, tmp_path: Path
+) -> None:
+    """Cut at t = 3: task 0 is picked up (t = 2), not delivered: delivered = T + 1."""
+    path = write_episode(schedule, tmp_path / "cut.json", horizon=3)
+    back = read_schedule(path, layout)
+    assert back.horizon == 3
+    assert back.task_pickup.tolist() == [2, 1]
+    assert back.task_delivered.tolist() == [4, 4]  # task 0 not delivered by 3; task 1 at 4 > 3
+
+
+def test_bad_saved_schedule(layout: Layout, tmp_path: Path) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text("{", encoding="utf-8")
+    with pytest.raises(ConfigError, match="not a LoRR output file"):
+        read_schedule(bad, layout)
