@@ -116,7 +116,10 @@ BASE_DEPENDENCIES = {
 #: The parts of the package that ``pip install rtaw_marl`` must run: the env, the simulator
 #: and the hand-written policies (everything else needs an extra).
 ENV_PATH = ("__init__.py", "errors.py", "warehouse_v*.py", "utils", "sim", "envs", "policies")
-NEEDS_EXTRA = ("envs/torchrl.py", "envs/torchrl_wrapper.py", "envs/mixed.py", "policies/network.py")
+NEEDS_EXTRA = (
+    "envs/torchrl.py", "envs/torchrl_wrapper.py", "envs/mixed.py", "policies/network.py",
+    "policies/export.py", "policies/export_check.py",
+)  # fmt: skip
 
 
 def _env_path_files() -> list[Path]:

@@ -11,6 +11,8 @@ What each command needs:
   trained policies (``policy=pretrained``, ``policy=checkpoint``) also need the ``train`` extra.
 * ``rtaw-train``, ``rtaw-study`` and ``rtaw-zoo``: the ``train`` extra (the ``cli`` extra
   plus torch, tensordict, torchrl).
+* ``rtaw-export``: the ``train`` extra; ``output=*.onnx`` also the ``export`` extra (onnx,
+  onnxscript, onnxruntime; checked by :mod:`rtaw_marl.policies.export`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ __all__ = [
     "EXTRAS",
     "NEEDS",
     "eval_main",
+    "export_main",
     "lorr_main",
     "render_main",
     "study_main",
@@ -48,6 +51,8 @@ NEEDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "zoo": ("train", EXTRAS["cli"] + EXTRAS["train"]),
     # The kit's build needs pybind11 only for rtaw_marl's schedulers: checked there.
     "lorr": ("cli", ("hydra", "omegaconf")),
+    # TorchScript needs torch only; .onnx checks the export extra itself.
+    "export": ("train", EXTRAS["train"]),
 }
 
 
@@ -108,6 +113,11 @@ def study_main() -> None:
 def zoo_main() -> None:
     """``rtaw-zoo`` (:mod:`rtaw_marl.cli.zoo`)."""
     _run("zoo")
+
+
+def export_main() -> None:
+    """``rtaw-export`` (:mod:`rtaw_marl.cli.export`)."""
+    _run("export")
 
 
 def lorr_main() -> None:

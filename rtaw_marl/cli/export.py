@@ -1,0 +1,132 @@
+"""``rtaw-export``: a trained policy's actor as a TorchScript or ONNX file, checked.
+
+Examples::
+
+    rtaw-export generalist_plus output=generalist_plus.onnx
+    rtaw-export A_astar_m10 output=rtaw_A.pt layout=A num_robots=30 queue_len=20
+    rtaw-export runs/demo/checkpoints/best.pt output=best.onnx scenario=C_astar_m10
+
+``POLICY`` is a shipped name or a checkpoint path; the ``KEY=VALUE`` options are the
+fields of :class:`~rtaw_marl.policies.export.ExportConfig`. The model is written only
+after it chose as the Python policy at every decision of a checked episode, with its
+specification beside it (``<output>.json``; docs/export.md). A user error (unknown
+policy or key, bad suffix or value) is one ``error:`` line and exit status 2; an export
+that disagrees with the policy is one line and exit status 1, and writes nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from typing import Any, NoReturn
+
+from rtaw_marl.errors import ConfigError, RtawError
+from rtaw_marl.policies.export import ExportCheckError, ExportConfig, export_policy
+
+__all__ = ["main", "parse", "parser", "run"]
+
+#: ExportConfig key -> how its value is read (``none`` or ``null`` is ``None``).
+_KINDS: dict[str, type] = {
+    "num_robots": int, "queue_len": int, "num_tasks": int, "seed": int,
+    "atol": float, "rtol": float,
+}  # fmt: skip
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (``error: ...``, exit status 2) like the other tools."""
+
+    def error(self, message: str) -> NoReturn:
+        print(f"error: {message}", file=sys.stderr)
+        sys.exit(2)
+
+
+def parser() -> argparse.ArgumentParser:
+    """The command line of ``rtaw-export``."""
+    keys = ", ".join(f.name for f in dataclasses.fields(ExportConfig))
+    p = _Parser(
+        prog="rtaw-export",
+        description=(__doc__ or "").splitlines()[0],
+        epilog=f"keys: {keys} (docs/export.md)",
+    )
+    p.add_argument("policy", help="a shipped policy name or a checkpoint path")
+    p.add_argument("options", nargs="*", metavar="KEY=VALUE", help="output=FILE.pt|FILE.onnx ...")
+    return p
+
+
+def parse(options: list[str]) -> ExportConfig:
+    """``KEY=VALUE`` strings -> the typed config.
+
+    Raises:
+        ConfigError: An option without ``=``, an unknown key (the valid ones listed), a
+            key given twice, or a value of the wrong type.
+    """
+    valid = [f.name for f in dataclasses.fields(ExportConfig)]
+    values: dict[str, Any] = {}
+    for option in options:
+        key, sep, text = option.partition("=")
+        if not sep:
+            raise ConfigError(f"expected KEY=VALUE, got {option!r}; keys: {', '.join(valid)}")
+        if key not in valid:
+            raise ConfigError(f"unknown key {key!r}; valid keys: {', '.join(valid)}")
+        if key in values:
+            raise ConfigError(f"{key} is given twice")
+        values[key] = _value(key, text)
+    return ExportConfig(**values)
+
+
+def _value(key: str, text: str) -> Any:
+    default = next(f.default for f in dataclasses.fields(ExportConfig) if f.name == key)
+    if text.lower() in ("none", "null") and default is None:
+        return None
+    kind = _KINDS.get(key, str)
+    try:
+        value = kind(text)
+    except ValueError:
+        name = "an integer" if kind is int else "a number"
+        raise ConfigError(f"{key} must be {name}, got {text!r}") from None
+    if kind is int and key != "seed" and value < 1:
+        raise ConfigError(f"{key} must be an integer >= 1, got {text!r}")
+    if (kind is float and not value >= 0) or (key == "seed" and value < 0):
+        raise ConfigError(f"{key} must be >= 0, got {text!r}")
+    return value
+
+
+def run(argv: list[str] | None = None) -> int:
+    """Run ``rtaw-export`` with ``argv``; returns the exit status.
+
+    Raises:
+        RtawError: A user error (see :func:`parse` and
+            :func:`~rtaw_marl.policies.export.export_policy`).
+    """
+    args = parser().parse_args(argv)
+    config = parse(args.options)
+    path, report = export_policy(args.policy, config)
+    print(f"{args.policy} -> {path} (specification: {path}.json)")
+    print(f"checked: {report.summary()}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point: user errors are one ``error:`` line and exit status 2, an
+    export that disagrees with the Python policy exit status 1."""
+    try:
+        status = run(argv)
+    except ExportCheckError as exc:
+        print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        sys.exit(1)
+    except RtawError as exc:
+        print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
+        sys.exit(2)
+    except OSError as exc:
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"error: {exc.strerror or exc}{where}".splitlines()[0], file=sys.stderr)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        sys.exit(130)
+    sys.exit(status)
+
+
+if __name__ == "__main__":
+    main()
