@@ -35,6 +35,8 @@ POLICIES = {"rtaw": "A_astar_m10", "rtaw_plus": "generalist_plus"}
 SMALL = {"num_robots": 6, "queue_len": 5, "num_tasks": 30}
 #: Another fleet, queue, layout and navigator than the export's check saw.
 OTHER = {"num_robots": 23, "queue_len": 12, "num_tasks": 40, "layout": "C", "navigator": "direct"}
+#: The smallest sizes: one robot (no rivals: every rival row padding), one slot.
+TINY = {"num_robots": 1, "queue_len": 1, "num_tasks": 10}
 
 
 @pytest.fixture(scope="module")
@@ -86,17 +88,19 @@ def test_export_writes_the_model_and_its_specification(
     assert not list(path.parent.glob(".*tmp"))
 
 
+@pytest.mark.parametrize("env", [OTHER, TINY], ids=["N12_M23", "N1_M1"])
 @pytest.mark.parametrize("suffix", [".pt", ".onnx"])
 @pytest.mark.parametrize("model", list(POLICIES))
 def test_exported_model_matches_on_other_fleet_and_queue_sizes(
-    exported: dict[tuple[str, str], Path], model: str, suffix: str
+    exported: dict[tuple[str, str], Path], model: str, suffix: str, env: dict
 ) -> None:
     """Dynamic dimensions: traced at N=3, M=4, checked at N=5, M=6, here at N=12, M=23
-    on another layout and navigator, every decision of an episode in one batch."""
+    on another layout and navigator and at N=1, M=1, every decision of an episode in
+    one batch."""
     path = exported[model, suffix]
     policy = load_policy(POLICIES[model])
-    inputs, actions = record_decisions(policy, OTHER, seed=7)
-    assert inputs["action_mask"].shape == (OTHER["num_tasks"], OTHER["queue_len"])
+    inputs, actions = record_decisions(policy, env, seed=7)
+    assert inputs["action_mask"].shape == (env["num_tasks"], env["queue_len"])
     run = load_exported(path.read_bytes(), export_format(path))
     report = check_exported(run, policy.net, inputs, actions, atol=1e-4, rtol=1e-4)
     assert report.ok, report.summary()
