@@ -12,7 +12,7 @@ from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import seed_list, seed_value
 from rtaw_marl.utils.checks import at_least, check_fields
 
-__all__ = ["EvalConfig", "RenderConfig", "StudyConfig"]
+__all__ = ["EvalConfig", "RenderConfig", "StudyConfig", "ViewConfig"]
 
 
 @dataclass(kw_only=True)
@@ -122,6 +122,55 @@ class RenderConfig(SimGroups):
             at_least(self, "", 0, "stop")
         if self.cell_px is not None:
             at_least(self, "", 1, "cell_px")
+
+
+@dataclass(kw_only=True)
+class ViewConfig(SimGroups):
+    """An ``rtaw-view`` run: one or two episodes in a self-contained HTML viewer.
+
+    Attributes:
+        policy: One policy, or two shown side by side on the same seed (names as in
+            ``rtaw-eval``; ``hindsight`` and ``batch`` included).
+        checkpoint: The checkpoint path when ``policy`` includes ``checkpoint``.
+        pretrained: The shipped policy name when ``policy`` includes ``pretrained``.
+        seed: Episode seed.
+        schedule: Instead of playing ``policy``: one or two saved episodes in LoRR's
+            output format (``rtaw-render output=*.json`` or LoRR's ``lifelong``), on the
+            map of the layout options (``scenario=lorr tasks.problem=P`` for a LoRR map).
+        output: The HTML file; ``None`` means ``view.html`` in the Hydra run folder.
+        title: The page's title; ``None``: the policies, navigator, layout and seed.
+        torch_threads: torch intra-op threads for network policies.
+        candidates: Learned policies score only the ``K`` queued tasks whose origins are
+            nearest the free robot when the queue holds more; ``None``: every one.
+        baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
+    """
+
+    policy: Any = "mpdm"
+    checkpoint: str | None = None
+    pretrained: str | None = None
+    seed: int = 0
+    schedule: Any = None
+    output: str | None = None
+    title: str | None = None
+    torch_threads: int = 1
+    candidates: int | None = None
+    baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        seed_value(self.seed, "seed")
+        at_least(self, "", 1, "torch_threads")
+        if self.candidates is not None:
+            at_least(self, "", 1, "candidates")
+        for key in ("policy", "schedule"):
+            value = getattr(self, key)
+            values = list(value) if isinstance(value, (list, tuple)) else [value]
+            if value is None and key == "schedule":
+                continue
+            if not 1 <= len(values) <= 2 or not all(isinstance(v, str) and v for v in values):
+                raise ConfigError(
+                    f"{key} must be one name or a list of two (side by side), got {value!r}"
+                )
 
 
 @dataclass(kw_only=True)

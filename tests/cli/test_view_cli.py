@@ -32,7 +32,7 @@ def _positions(ep: dict) -> np.ndarray:
         raw = zlib.decompress(base64.b64decode(entry["data"]))
         return np.frombuffer(raw, dtype=entry["dtype"]).reshape(entry["shape"])
 
-    steps = np.array(MOVES)[array("moves")]
+    steps = np.array(MOVES)[array("moves").T]  # sent [M, T]
     start = array("start")
     return np.concatenate([start[None], start[None] + steps.cumsum(0)])
 

@@ -107,7 +107,7 @@ def test_page_is_self_contained_and_holds_the_episode(layout: Layout, schedule: 
     (ep,) = data["episodes"]
     assert ep["name"] == "a</script>"
     assert (data["width"], data["height"]) == (6, 4)
-    assert np.array_equal(_array(ep["moves"]), move_codes(schedule.positions))
+    assert np.array_equal(_array(ep["moves"]), move_codes(schedule.positions).T)
     assert np.array_equal(_array(ep["start"]), schedule.positions[0])
     assert _array(data["cells"]).reshape(4, 6)[3, 5] == 1
 

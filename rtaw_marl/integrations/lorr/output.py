@@ -31,7 +31,14 @@ from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["Replay", "episode_output", "read_replay", "replay", "write_episode"]
+__all__ = [
+    "Replay",
+    "episode_output",
+    "read_replay",
+    "read_schedule",
+    "replay",
+    "write_episode",
+]
 
 #: PlanViz's ``MAPF`` letters: (row, column) change.
 _MAPF_MOVES = {"U": (1, 0), "D": (-1, 0), "R": (0, 1), "L": (0, -1), "W": (0, 0), "T": (0, 0)}
@@ -120,6 +127,52 @@ def read_replay(path: str | Path, layout: Layout) -> Replay:
     except (OSError, ValueError) as exc:
         raise ConfigError(f"{path}: not a LoRR output file ({exc})") from None
     return replay(data, layout)
+
+
+def read_schedule(path: str | Path, layout: Layout) -> Schedule:
+    """A LoRR output file (``lifelong``'s or ``rtaw-render``'s) as a checked :class:`Schedule`.
+
+    The file is replayed and checked first (:func:`replay`). Each task's robot and
+    assignment time come from ``actualSchedule`` (the entry of the robot its events name,
+    else the last), its pickup and delivery from its first and last errand's events; a
+    task not yet picked up or delivered at the end has that time set to ``T + 1``.
+    Tasks keep their ids' order. Tasks that were never assigned are left out.
+    """
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{path}: not a LoRR output file ({exc})") from None
+    played = replay(data, layout)
+    end = played.positions.shape[0]  # T + 1: "not within the episode"
+    errands = {int(t[0]): np.asarray(t[2], dtype=np.int64).reshape(-1, 2) for t in data["tasks"]}
+    release = {int(t[0]): int(t[1]) for t in data["tasks"]}
+    reached: dict[int, dict[int, int]] = {}
+    by_events: dict[int, int] = {}
+    for t, robot, task, seq in (tuple(int(v) for v in e[:4]) for e in data["events"]):
+        reached.setdefault(task, {})[seq] = t
+        by_events.setdefault(task, robot)
+    assigned: dict[int, tuple[int, int]] = {}
+    for robot, text in enumerate(data.get("actualSchedule", [])):
+        for entry in filter(None, str(text).split(",")):
+            when, _, task = entry.partition(":")
+            tid = int(task)
+            if tid in errands and by_events.get(tid, robot) == robot:
+                assigned[tid] = (robot, int(when))
+    ids = sorted(assigned)
+    rows = np.array(
+        [[*errands[k][0, ::-1], *errands[k][-1, ::-1]] for k in ids], dtype=np.int64
+    ).reshape(-1, 4)
+    return Schedule(
+        positions=played.positions[..., ::-1].copy(),
+        tasks=rows,
+        task_robot=np.array([assigned[k][0] for k in ids], dtype=np.int64),
+        task_arrival=np.array([release[k] for k in ids], dtype=np.int64),
+        task_assigned=np.array([assigned[k][1] for k in ids], dtype=np.int64),
+        task_pickup=np.array([reached.get(k, {}).get(1, end) for k in ids], dtype=np.int64),
+        task_delivered=np.array(
+            [reached.get(k, {}).get(len(errands[k]), end) for k in ids], dtype=np.int64
+        ),
+    )
 
 
 def replay(data: dict[str, Any], layout: Layout) -> Replay:

@@ -27,7 +27,8 @@ async function decode(a) {
   return new TYPES[a.dtype](await new Response(stream).arrayBuffer());
 }
 
-// One episode: positions at any timestep, robot states, tasks by robot.
+// One episode: positions at any timestep, robot states, tasks by robot. Moves come
+// robot by robot: robot m's move from s to s + 1 is moves[m * T + s].
 class Episode {
   constructor(meta, arrays) {
     this.name = meta.name;
@@ -53,9 +54,9 @@ class Episode {
     for (let t = 0; t <= this.T; t++) {
       if (t % KEY === 0) this.keys.push(pos.slice());
       if (t === this.T) break;
-      const row = t * M;
+      const T = this.T;
       for (let m = 0; m < M; m++) {
-        const c = this.moves[row + m];
+        const c = this.moves[m * T + t];
         if (c) { pos[2 * m] += DX[c]; pos[2 * m + 1] += DY[c]; }
       }
     }
@@ -96,9 +97,9 @@ class Episode {
     }
   }
   applyRow(s) {
-    const row = s * this.M, pos = this.pos, mv = this.moves;
+    const T = this.T, pos = this.pos, mv = this.moves;
     for (let m = 0; m < this.M; m++) {
-      const c = mv[row + m];
+      const c = mv[m * T + s];
       if (c) { pos[2 * m] += DX[c]; pos[2 * m + 1] += DY[c]; }
     }
   }
@@ -106,19 +107,19 @@ class Episode {
   path(m, a, b) {
     const out = [];
     let k = Math.floor(a / KEY), x = this.keys[k][2 * m], y = this.keys[k][2 * m + 1];
-    for (let s = k * KEY; s < a; s++) { const c = this.moves[s * this.M + m]; x += DX[c]; y += DY[c]; }
+    for (let s = k * KEY; s < a; s++) { const c = this.moves[m * this.T + s]; x += DX[c]; y += DY[c]; }
     out.push(x, y);
     for (let s = a; s < Math.min(b, this.T); s++) {
-      const c = this.moves[s * this.M + m]; x += DX[c]; y += DY[c]; out.push(x, y);
+      const c = this.moves[m * this.T + s]; x += DX[c]; y += DY[c]; out.push(x, y);
     }
     return out;
   }
   waits(m, a, b) {
     let n = 0;
-    for (let s = a; s < Math.min(b, this.T); s++) if (this.moves[s * this.M + m] === 0) n++;
+    for (let s = a; s < Math.min(b, this.T); s++) if (this.moves[m * this.T + s] === 0) n++;
     return n;
   }
-  moveAt(m, t) { return t < this.T ? this.moves[t * this.M + m] : 0; }
+  moveAt(m, t) { return t < this.T ? this.moves[m * this.T + t] : 0; }
 }
 
 // ---------------------------------------------------------------------------- the view
