@@ -9,6 +9,7 @@ What each command needs:
 
 * ``rtaw-eval`` and ``rtaw-render``: the ``cli`` extra (Hydra, tqdm, matplotlib); the
   trained policies (``policy=pretrained``, ``policy=checkpoint``) also need the ``train`` extra.
+* ``rtaw-results``: the ``cli`` extra (matplotlib, PyYAML through omegaconf).
 * ``rtaw-train``, ``rtaw-study`` and ``rtaw-zoo``: the ``train`` extra (the ``cli`` extra
   plus torch, tensordict, torchrl).
 * ``rtaw-export``: the ``train`` extra; ``output=*.onnx`` also the ``export`` extra (onnx,
@@ -28,8 +29,10 @@ __all__ = [
     "export_main",
     "lorr_main",
     "render_main",
+    "results_main",
     "study_main",
     "train_main",
+    "view_main",
     "zoo_main",
 ]
 
@@ -44,6 +47,9 @@ _EXTRA_NAMES = {"cli": "command-line", "train": "training"}
 NEEDS: dict[str, tuple[str, tuple[str, ...]]] = {
     "eval": ("cli", ("hydra", "omegaconf", "tqdm")),
     "render": ("cli", ("hydra", "omegaconf", "matplotlib", "PIL")),
+    "view": ("cli", ("hydra", "omegaconf", "tqdm")),
+    # Combines results.json files: plain argparse, a plot, the sweep's overrides.yaml.
+    "results": ("cli", ("matplotlib", "yaml")),
     "train": ("train", EXTRAS["cli"] + EXTRAS["train"]),
     # The paper's tables evaluate the shipped learned policies.
     "study": ("train", EXTRAS["cli"] + EXTRAS["train"]),
@@ -98,6 +104,16 @@ def eval_main() -> None:
 def render_main() -> None:
     """``rtaw-render`` (:mod:`rtaw_marl.cli.render`)."""
     _run("render")
+
+
+def results_main() -> None:
+    """``rtaw-results`` (:mod:`rtaw_marl.cli.results`)."""
+    _run("results")
+
+
+def view_main() -> None:
+    """``rtaw-view`` (:mod:`rtaw_marl.cli.view`)."""
+    _run("view")
 
 
 def train_main() -> None:

@@ -71,6 +71,22 @@ def test_official_simulator_runs_our_schedulers(official: dict[str, LoRRRun], na
 
 
 @needs_kit
+def test_lifelong_output_opens_in_the_viewer(official: dict[str, LoRRRun]) -> None:
+    """LoRR's own output (turning action model) as a schedule for rtaw-view: its tasks
+    finished are the run's, every robot's cells are the replay's, the page builds."""
+    from rtaw_marl.integrations.lorr.output import read_schedule
+    from rtaw_marl.viz.view import ViewEpisode, page
+
+    run, layout = official["mpdm"], read_problem(RANDOM).layout()
+    schedule = read_schedule(run.output, layout)
+    assert int((schedule.task_delivered <= schedule.horizon).sum()) == run.tasks_finished
+    played = read_replay(run.output, layout)
+    assert np.array_equal(schedule.positions, played.positions[..., ::-1])
+    assert (schedule.task_pickup <= schedule.task_delivered).all()
+    assert "rtaw-data" in page(layout, [ViewEpisode("lifelong", schedule)], "LoRR")
+
+
+@needs_kit
 def test_own_simulator_predicts_the_official_count(official: dict[str, LoRRRun]) -> None:
     """The project's PIBT simulator, same problem, MPDM, 200 timesteps, finishes more
     tasks: its robots turn in no time, LoRR's spend a timestep per quarter turn (about a
