@@ -11,6 +11,7 @@ const DX = [0, 1, -1, 0, 0];
 const DY = [0, 0, 0, 1, -1];
 const IDLE = 0, TO_PICKUP = 1, CARRYING = 2;
 const STATE_NAMES = ["idle", "to pickup", "carrying"];
+const QUEUED_COLOR = "#5a5a5a";
 const STATE_COLORS = ["#8c8c8c", "#1f6fd1", "#e8710a"];
 const CELL_COLORS = [[242, 242, 242], [58, 63, 75], [204, 236, 204], [252, 222, 190]];
 // Below this many pixels per cell, robots are drawn as pixels of a grid-sized image.
@@ -248,6 +249,7 @@ function drawRobotRects(panel, frac) {
   ctx.drawImage(view.map, 0, 0);
   const x0 = -view.offX / s - 1, y0 = -view.offY / s - 1;
   const x1 = x0 + panel.canvas.width / dpr / s + 2, y1 = y0 + panel.canvas.height / dpr / s + 2;
+  drawQueued(panel, x0, y0, x1, y1);
   const pad = 0.12;
   for (let st = 0; st < 3; st++) {
     ctx.beginPath();
@@ -260,6 +262,25 @@ function drawRobotRects(panel, frac) {
     ctx.fillStyle = STATE_COLORS[st];
     ctx.fill();
   }
+}
+
+// Tasks waiting in the queue at t (arrived, not yet assigned): hollow squares at their
+// pickups. Tasks are sorted by assignment time, so the search starts past t's.
+function drawQueued(panel, x0, y0, x1, y1) {
+  const ep = panel.ep, tk = ep.tasks, t = ep.at;
+  let lo = 0, hi = ep.K;
+  while (lo < hi) { const mid = (lo + hi) >> 1; if (tk[9 * mid + 6] <= t) lo = mid + 1; else hi = mid; }
+  const ctx = panel.ctx;
+  ctx.beginPath();
+  for (let k = lo; k < ep.K; k++) {
+    if (tk[9 * k + 5] > t) continue;
+    const x = tk[9 * k], y = tk[9 * k + 1];
+    if (x < x0 || x > x1 || y < y0 || y > y1) continue;
+    ctx.rect(x + 0.3, y + 0.3, 0.4, 0.4);
+  }
+  ctx.strokeStyle = QUEUED_COLOR;
+  ctx.lineWidth = Math.max(0.08, 1 / view.scale);
+  ctx.stroke();
 }
 
 function drawSelected(panel, frac) {
@@ -463,7 +484,7 @@ function search(text) {
 
 function legend() {
   const items = STATE_NAMES.map((n, i) => [n, STATE_COLORS[i]]);
-  items.push(["obstacle", "rgb(58,63,75)"], ["pickup station", "rgb(204,236,204)"], ["delivery station", "rgb(252,222,190)"], ["congestion", "rgb(220,20,20)"]);
+  items.push(["queued task (zoomed in)", "#ffffff"], ["obstacle", "rgb(58,63,75)"], ["pickup station", "rgb(204,236,204)"], ["delivery station", "rgb(252,222,190)"], ["congestion", "rgb(220,20,20)"]);
   el("legend").innerHTML = items.map(([n, c]) => `<span class="item"><span class="swatch" style="background:${c}"></span>${n}</span>`).join("");
 }
 
