@@ -7,7 +7,8 @@ print its one-line message and exit non-zero without a traceback.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import difflib
+from collections.abc import Iterable, Mapping
 from typing import TypeVar
 
 T = TypeVar("T")
@@ -33,8 +34,46 @@ class InvalidActionError(RtawError, ValueError):
     """An action names a queue slot that is out of range or empty."""
 
 
+def close_names(name: str, choices: Iterable[str], n: int = 3) -> list[str]:
+    """The valid names closest to a misspelt ``name``, best first (none when none is close).
+
+    Case is ignored (``row=c`` finds ``C``); otherwise :func:`difflib.get_close_matches`
+    ranks them, with its default cutoff (0.6 similarity).
+    """
+    by_lower: dict[str, str] = {}
+    for choice in choices:
+        by_lower.setdefault(choice.lower(), choice)
+    wanted = name.lower()
+    if wanted in by_lower:
+        return [by_lower[wanted]]
+    close = difflib.get_close_matches(wanted, list(by_lower), n=n)
+    # Equally close names in alphabetical order (difflib puts ties in reverse).
+    close.sort(key=lambda m: (-difflib.SequenceMatcher(None, wanted, m).ratio(), m))
+    return [by_lower[m] for m in close]
+
+
+def did_you_mean(name: str, choices: Iterable[str], prefix: str = "") -> str:
+    """``"; did you mean 'x'?"`` naming the choices closest to ``name``, else ``""``.
+
+    The one place every "unknown name" message gets its suggestion (registries, config
+    keys, config group options), appended after the list of valid names.
+
+    Args:
+        name: What the user typed.
+        choices: The valid names.
+        prefix: Written before each suggestion (``"env."``, ``"navigator="``), so the
+            suggestion is what to type.
+    """
+    close = [repr(f"{prefix}{c}") for c in close_names(name, choices)]
+    if not close:
+        return ""
+    spelled = close[0] if len(close) == 1 else f"{', '.join(close[:-1])} or {close[-1]}"
+    return f"; did you mean {spelled}?"
+
+
 def unknown_name(kind: str, name: str, available: list[str] | tuple[str, ...]) -> ConfigError:
-    """Build the error for an unknown registry name, listing what exists.
+    """Build the error for an unknown registry name, listing what exists and suggesting
+    the closest names (:func:`did_you_mean`).
 
     Args:
         kind: What was looked up, e.g. ``"navigator"``.
@@ -44,7 +83,10 @@ def unknown_name(kind: str, name: str, available: list[str] | tuple[str, ...]) -
     Returns:
         A :class:`ConfigError` to raise.
     """
-    return ConfigError(f"unknown {kind} {name!r}; available: {', '.join(sorted(available))}")
+    listing = ", ".join(sorted(available))
+    return ConfigError(
+        f"unknown {kind} {name!r}; available: {listing}{did_you_mean(name, available)}"
+    )
 
 
 def lookup(registry: Mapping[str, T], kind: str, name: str) -> T:

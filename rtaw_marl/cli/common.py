@@ -18,7 +18,9 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
+from rtaw_marl.cli.completion import narrowed_completion
 from rtaw_marl.config import CONF_DIR, check_overrides, config_error, register_configs, to_typed
+from rtaw_marl.config.help import register_help
 from rtaw_marl.errors import ConfigError, RtawError
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
@@ -49,6 +51,7 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
     ``128 + signal`` (130, 143).
     """
     register_configs()
+    register_help()
 
     @exit_on_user_error
     @wraps(task)
@@ -67,7 +70,8 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
         # Let composition errors reach this frame instead of Hydra's own report.
         os.environ["HYDRA_FULL_ERROR"] = "1"
         try:
-            with terminate_as_interrupt():
+            # -sc: a bad request is one line; a query offers only this command's groups.
+            with terminate_as_interrupt(), narrowed_completion(config_name, sys.argv[1:]):
                 hydra_main()
         except (HydraException, OmegaConfBaseException, RtawError, OSError) as exc:
             print(f"error: {_one_line(exc)}", file=sys.stderr)

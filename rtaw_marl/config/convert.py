@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 from hydra import compose as hydra_compose
@@ -14,14 +13,12 @@ from hydra.errors import HydraException, MissingConfigException
 from omegaconf import BooleanNode, DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
-from rtaw_marl.config.store import register_configs
-from rtaw_marl.errors import ConfigError, RtawError
+from rtaw_marl.config.help import register_help
+from rtaw_marl.config.store import CONF_DIR, register_configs
+from rtaw_marl.errors import ConfigError, RtawError, did_you_mean
 from rtaw_marl.utils.plain import as_plain
 
 __all__ = ["CONF_DIR", "as_plain", "check_overrides", "compose", "config_error", "to_typed"]
-
-#: The packaged Hydra config folder (``rtaw_marl/conf``).
-CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
 
 
 def compose(
@@ -36,6 +33,7 @@ def compose(
         ConfigError: Composition failed (unknown key, option or value type); one line.
     """
     register_configs()
+    register_help()
     try:
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
             cfg = hydra_compose(
@@ -134,8 +132,7 @@ def _check_keys(node: DictConfig, prefix: str) -> None:
         valid = [f.name for f in dataclasses.fields(schema)]
         for key in node:
             if key not in valid:
-                listing = _settable(schema, prefix.rstrip("."))  # type: ignore[arg-type]
-                raise ConfigError(f"unknown config key '{prefix}{key}'; {listing}")
+                raise _unknown_key(f"{prefix}{key}", schema)  # type: ignore[arg-type]
     for key in node:
         child = node._get_node(key)
         if isinstance(child, DictConfig) and not child._is_missing() and not child._is_none():
@@ -153,9 +150,7 @@ def config_error(exc: BaseException) -> RtawError:
     if "LexerNoViableAltException" in str(exc):
         return _unparsable(str(exc))
     if isinstance(exc, MissingConfigException) and exc.options is not None:
-        first = str(exc).strip().splitlines()[0]
-        options = ", ".join(o for o in exc.options if not o.startswith("_"))
-        return ConfigError(f"{first}; available: {options}")
+        return _missing_option(exc, [o for o in exc.options if not o.startswith("_")])
     cause = exc
     while not isinstance(cause, OmegaConfBaseException) and cause.__cause__ is not None:
         cause = cause.__cause__
@@ -168,10 +163,29 @@ def config_error(exc: BaseException) -> RtawError:
     if isinstance(cause, OmegaConfBaseException) and key:
         object_type = getattr(cause, "object_type", None)
         if "not in" in first and dataclasses.is_dataclass(object_type):
-            listing = _settable(object_type, key.rpartition(".")[0])  # type: ignore[arg-type]
-            return ConfigError(f"unknown config key {key!r}; {listing}")
+            return _unknown_key(key, object_type)  # type: ignore[arg-type]
         return ConfigError(f"config key {key!r}: {first}")
     return ConfigError(first)
+
+
+def _unknown_key(key: str, schema: type) -> ConfigError:
+    """``unknown config key 'env.num_robot'; valid keys there: ...; did you mean
+    'env.num_robots'?`` for a ``key`` that ``schema`` (its parent's) does not declare."""
+    group, _, leaf = key.rpartition(".")
+    parent = f"{group}." if group else ""
+    keys = [f.name for f in dataclasses.fields(schema) if f.name != "name"]  # type: ignore[arg-type]
+    hint = did_you_mean(leaf, keys, prefix=parent)
+    return ConfigError(f"unknown config key {key!r}; {_settable(schema, group)}{hint}")
+
+
+def _missing_option(exc: MissingConfigException, options: list[str]) -> ConfigError:
+    """Hydra's ``In 'eval': Could not find 'navigator/sipq'`` with the group's options
+    and the closest ones (``did you mean 'navigator=sipp'?``)."""
+    first = str(exc).strip().splitlines()[0]
+    group, _, name = (exc.missing_cfg_file or "").rpartition("/")
+    # The group as typed on the command line: hydra/launcher=..., navigator=...
+    hint = did_you_mean(name, options, prefix=f"{group}=") if group else ""
+    return ConfigError(f"{first}; available: {', '.join(options)}{hint}")
 
 
 def _unparsable(text: str) -> ConfigError:

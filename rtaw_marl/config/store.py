@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 import os
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -26,7 +27,10 @@ from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
 from rtaw_marl.training.zoo import ZOO
 
-__all__ = ["GROUPS", "register_configs"]
+__all__ = ["CONF_DIR", "GROUPS", "register_configs"]
+
+#: The packaged Hydra config folder (``rtaw_marl/conf``).
+CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
 
 #: Config group -> option name -> schema dataclass.
 GROUPS: dict[str, dict[str, type]] = {

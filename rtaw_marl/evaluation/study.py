@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.evaluation.evaluate import SimPolicy, evaluate
 from rtaw_marl.evaluation.journal import EpisodeJournal, file_digest, with_file_digests
 from rtaw_marl.policies import BASELINES, BaselinesConfig, make_baseline
@@ -103,7 +103,7 @@ def rule(name: str, **params: Any) -> PolicyRef:
     """A rule of :data:`~rtaw_marl.policies.BASELINES` (``mpdm``, ``lookahead``, ...),
     with :class:`~rtaw_marl.policies.BaselinesConfig` parameters."""
     if name not in BASELINES:
-        raise ConfigError(f"unknown rule {name!r}; available: {', '.join(BASELINES)}")
+        raise unknown_name("rule", name, list(BASELINES))
     BaselinesConfig(**params)  # an unknown or bad parameter fails here, not in a worker
     return PolicyRef("rule", name, tuple(sorted(params.items())))
 

@@ -20,7 +20,7 @@ from collections.abc import Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.policies.pretrained.registry import SHIPPED
 from rtaw_marl.training.zoo import RUNS, ZOO, recipe, rtaw_train, train_command
@@ -180,7 +180,7 @@ def sweep_command(names: Sequence[str], launcher: str, settings: Sequence[str] =
             ``<runs>/<base>``, not in the sweep's folder).
     """
     if launcher not in LAUNCHERS:
-        raise ConfigError(f"unknown launcher {launcher!r}; available: {', '.join(LAUNCHERS)}")
+        raise unknown_name("launcher", launcher, list(LAUNCHERS))
     if not names:
         raise ConfigError("no zoo entry to sweep")
     staged = phases(names)[1]

@@ -15,7 +15,7 @@ import subprocess
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.evaluation.study import Cell, Study, Ttd, checkpoint, rule, run_study
 from rtaw_marl.evaluation.tables import mean_cell, vs
@@ -153,7 +153,7 @@ def reward_command(reward: str, run_dir: Path) -> list[str]:
     """The reward ablation's run: RTAW on layout A with A*, 10 robots, designated tasks,
     ``algo=ppo_fast``, 102,400 frames, seed 0, trained with ``env.reward=<reward>``."""
     if reward not in REWARDS:
-        raise ConfigError(f"unknown reward {reward!r}; available: {', '.join(REWARDS)}")
+        raise unknown_name("reward", reward, list(REWARDS))
     setting = [o for o in SCENARIOS["A_astar_m10"].overrides() if o != "tasks=designated"]
     return _command(
         [*setting, "algo=ppo_fast", "frames=102400", "eval.every_frames=10240", "seed=0",

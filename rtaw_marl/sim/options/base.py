@@ -7,7 +7,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from rtaw_marl.errors import ConfigError, unknown_name
+from rtaw_marl.errors import ConfigError, did_you_mean, unknown_name
 from rtaw_marl.utils.checks import check_fields
 
 __all__ = ["Option", "option_from"]
@@ -57,9 +57,10 @@ def option_from(
     keys = [f.name for f in dataclasses.fields(cls)]
     unknown = sorted(set(params) - set(keys))
     if unknown:
+        settable = [k for k in keys if k != "name"]
         raise ConfigError(
             f"unknown key {group}.{unknown[0]} for {group}={name}; valid keys: "
-            f"{', '.join(k for k in keys if k != 'name') or 'none'}"
+            f"{', '.join(settable) or 'none'}{did_you_mean(unknown[0], settable, f'{group}.')}"
         )
     required = [
         f.name
