@@ -1,16 +1,19 @@
 """``rtaw-render``: play one episode and save it as an animated GIF (or, with an
 ``output`` ending in ``.json``, in LoRR's output format, for its viewer PlanViz).
 
-The episode runs with a collision-aware navigator (``sipp`` by default, or ``cbs``), is
-checked by the independent conflict checker, then drawn: robots moving along their
-paths, queued tasks, tasks on their way to pickup, carried tasks and their destinations.
+The episode runs with a collision-aware navigator (``sipp`` by default, ``cbs`` or
+``pibt``), with progress on stderr, is checked by the independent conflict checker, then
+drawn: robots moving along their paths, queued tasks, tasks on their way to pickup,
+carried tasks and their destinations.
 
 Examples::
 
     rtaw-render layout=A policy=pretrained pretrained=A_astar_m10 output=episode.gif
     rtaw-render navigator=cbs env.num_tasks=20 every=2 fps=12
-    rtaw-render scenario=lorr tasks.problem=P.json env.horizon=500 env.num_tasks=5000 \
-        navigator=pibt output=episode.json
+    rtaw-render scenario=lorr tasks.problem=P.json env.horizon=500 output=episode.json
+
+A GIF shows robots in 18 cycling colours: to follow one robot in a large fleet, use
+``rtaw-view`` (an interactive page: search a robot or task and follow it).
 """
 
 from __future__ import annotations
@@ -21,11 +24,10 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, typed
+from rtaw_marl.cli.episode import note, play_checked
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import RenderConfig
-from rtaw_marl.evaluation.evaluate import run_episode
 from rtaw_marl.sim.builder import build_sim
-from rtaw_marl.sim.mapf.conflicts import check_schedule
 from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.gif import render_gif
 
@@ -54,9 +56,7 @@ def run(cfg: DictConfig | RenderConfig) -> Path:
         )
     sim = build_sim(cfg.sim_spec())
     (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
-    metrics = run_episode(sim, policy, int(cfg.seed))
-    schedule = sim.schedule()
-    check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
+    metrics, schedule = play_checked(sim, name, policy, int(cfg.seed))
     if output.suffix == ".json":
         from rtaw_marl.integrations.lorr.output import write_episode
 
@@ -67,6 +67,7 @@ def run(cfg: DictConfig | RenderConfig) -> Path:
         )
         return path
     title = f"{name} | {cfg.navigator.name} | {sim.layout.name} | seed {cfg.seed}"
+    note(f"drawing {output}")
     path = render_gif(
         sim.layout,
         schedule,

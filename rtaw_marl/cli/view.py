@@ -16,77 +16,28 @@ Examples::
 
 from __future__ import annotations
 
-import sys
-import time
 from pathlib import Path
 
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
-from tqdm import tqdm
 
 from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, typed
+from rtaw_marl.cli.episode import note, play_checked
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import ViewConfig
-from rtaw_marl.evaluation.evaluate import SimPolicy, run_episode
-from rtaw_marl.evaluation.transcript import progress_shown
+from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.mapf.conflicts import check_schedule
 from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.view import ViewEpisode, write_view
-
-
-def _note(text: str) -> None:
-    print(text, file=sys.stderr, flush=True)
 
 
 def _as_list(value: object) -> list[str]:
     return [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
 
 
-class _Progress:
-    """A tqdm bar on a terminal; else a line on stderr at every tenth of the episode."""
-
-    def __init__(self, name: str, total: int, unit: str) -> None:
-        self.name, self.total, self.unit, self.done, self.start = name, total, unit, 0, time.time()
-        self.bar = (
-            tqdm(total=total, desc=f"playing {name}", unit=unit, file=sys.stderr)
-            if progress_shown(True)
-            else None
-        )
-
-    def to(self, done: int) -> None:
-        done = min(done, self.total)
-        if self.bar is not None:
-            self.bar.update(done - self.bar.n)
-        elif done * 10 // max(self.total, 1) > self.done * 10 // max(self.total, 1):
-            _note(
-                f"playing {self.name}: {done}/{self.total} {self.unit}s "
-                f"({time.time() - self.start:.0f} s)"
-            )
-        self.done = done
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpisode:
-    """One episode with progress on stderr (timesteps for horizon episodes)."""
-    horizon = sim.config.horizon if sim.config.episode_mode == "horizon" else None
-    total = horizon if horizon is not None else sim.config.num_tasks
-    progress = _Progress(name, total, "timestep" if horizon is not None else "decision")
-    start = time.perf_counter()
-
-    def advance(decisions: int) -> None:
-        progress.to(int(sim.time) if horizon is not None else progress.done + decisions)
-
-    metrics = run_episode(sim, policy, seed, on_decisions=advance)
-    progress.to(total)
-    progress.close()
-    _note(f"{name}: played in {time.perf_counter() - start:.1f} s; checking the schedule")
-    schedule = sim.schedule()
-    check_schedule(sim.layout, schedule, expected_tasks=len(schedule.tasks))
+    metrics, schedule = play_checked(sim, name, policy, seed)
     summary = {
         "TTD": round(float(metrics.ttd), 1),
         "tasks finished": int(metrics.tasks_finished),
@@ -105,7 +56,7 @@ def _saved(cfg: ViewConfig) -> tuple[object, list[ViewEpisode]]:
     layout = cfg.sim_spec().layout.build()
     episodes = []
     for path in paths:
-        _note(f"replaying and checking {path}")
+        note(f"replaying and checking {path}")
         schedule = read_schedule(path, layout)
         finished = int((schedule.task_delivered <= schedule.horizon).sum())
         summary = {"tasks finished": finished, "timesteps": schedule.horizon}
@@ -139,7 +90,7 @@ def run(cfg: DictConfig | ViewConfig) -> Path:
         title = cfg.title or (
             f"{' vs '.join(policies)} | {cfg.navigator.name} | {layout.name} | seed {cfg.seed}"
         )
-    path = write_view(output, layout, episodes, title, progress=_note)
+    path = write_view(output, layout, episodes, title, progress=note)
     for ep in episodes:
         print(f"{ep.name}: " + ", ".join(f"{k} {v}" for k, v in ep.summary.items()))
     print(f"viewer: {path} ({path.stat().st_size / 1e6:.1f} MB)")

@@ -2,9 +2,10 @@
 
 One frame per drawn time step ``t``. Legend:
 
-* Header strip (:data:`HEADER_PX` pixels, white): the optional title, ``t = 12 s`` and
-  counters of the schedule's tasks that are queued, assigned (robot on its way to the
-  origin), carried and delivered at ``t``. Tasks that were never assigned are not in
+* Header strip (:data:`HEADER_PX` pixels, white): the optional title on its own line,
+  then ``t = 12 s`` and counters of the schedule's tasks that are queued, assigned
+  (robot on its way to the origin), carried and delivered at ``t``; a title wider than
+  the picture ends in an ellipsis. Tasks that were never assigned are not in
   a schedule, so they are not counted as queued.
 * Cells: free light grey, obstacles dark slate, pickup stations light green, delivery
   stations light orange (when the layout has station masks); thin grid lines between
@@ -38,10 +39,17 @@ from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["BASE_COLORS", "HEADER_PX", "ROBOT_COLORS", "render_gif", "robot_color"]
+__all__ = [
+    "BASE_COLORS",
+    "HEADER_PX",
+    "ROBOT_COLORS",
+    "fit_text",
+    "render_gif",
+    "robot_color",
+]
 
-HEADER_PX = 20
-"""Height in pixels of the header strip above the grid."""
+HEADER_PX = 34
+"""Height in pixels of the header strip above the grid (two lines of text)."""
 
 BASE_COLORS: dict[str, tuple[int, int, int]] = {
     "header": (255, 255, 255),
@@ -124,6 +132,20 @@ def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     if features.check("freetype2"):
         return ImageFont.load_default(size=size)
     return ImageFont.load_default_imagefont()
+
+
+def fit_text(text: str, font: ImageFont.FreeTypeFont | ImageFont.ImageFont, width: float) -> str:
+    """``text`` shortened to an ellipsis-ended prefix that fits in ``width`` pixels."""
+    if font.getlength(text) <= width:
+        return text
+    lo, hi = 0, len(text)
+    while lo < hi:  # the longest prefix that fits with the ellipsis
+        mid = (lo + hi + 1) // 2
+        if font.getlength(text[:mid] + "…") <= width:
+            lo = mid
+        else:
+            hi = mid - 1
+    return text[:lo] + "…"
 
 
 def render_gif(
@@ -217,6 +239,7 @@ def _frames(
     arrival, assigned = np.asarray(s.task_arrival), np.asarray(s.task_assigned)
     pickup, delivered = np.asarray(s.task_pickup), np.asarray(s.task_delivered)
     header_font = _font(12)
+    room = background.width - 8
     # Centred (anchored) text needs a FreeType font; without one robots go unlabelled.
     ids = c >= 14 and features.check("freetype2")
     id_font = ImageFont.load_default(size=max(8, int(c * 0.45))) if ids else None
@@ -242,9 +265,11 @@ def _frames(
             f"t = {t} s   queued {len(queued)}   assigned {len(going)}   "
             f"carrying {len(carried)}   delivered {done}"
         )
-        draw.text(
-            (4, 3), f"{title}   {text}" if title else text, fill=_IDX["text"], font=header_font
-        )
+        # The title ends in an ellipsis when too wide; the counters line starts with the
+        # time, which every frame shows even on a tiny picture.
+        lines = [fit_text(title, header_font, room), text] if title else [text]
+        for row, line in enumerate(lines):
+            draw.text((4, 3 + 15 * row), line, fill=_IDX["text"], font=header_font)
         for k in queued:
             draw.rectangle(square(*tasks[k, :2], 0.5), outline=_IDX["queued"], width=mark_w)
         for k in going:

@@ -155,3 +155,22 @@ def test_overwrite_is_atomic(tmp_path: Path, layout: Layout, schedule: Schedule)
     render_gif(layout, schedule, target, cell_px=4, every=5)
     assert len(_frames(target)) == 3
     assert [p.name for p in tmp_path.iterdir()] == ["ep.gif"]
+
+
+def test_header_lines_fit_the_picture(layout: Layout, schedule: Schedule, tmp_path: Path) -> None:
+    """The title has its own line; a line wider than the picture ends in an ellipsis
+    instead of running off its edge (a 100-robot title used to be cut off)."""
+    from rtaw_marl.viz.gif import _font, fit_text
+
+    font = _font(12)
+    long = "rtaw:generalist_plus | sipp | layout_A_60x60 | seed 0   " * 3
+    fitted = fit_text(long, font, 200)
+    assert fitted.endswith("…")
+    assert font.getlength(fitted) <= 200
+    assert long.startswith(fitted[:-1])
+    assert fit_text("t = 3 s", font, 200) == "t = 3 s"
+    out = render_gif(layout, schedule, tmp_path / "t.gif", cell_px=10, title=long)
+    with Image.open(out) as im:
+        header = np.asarray(im.convert("RGB"))[:HEADER_PX]
+    dark = np.flatnonzero((header.sum(axis=-1) < 300).any(axis=1))
+    assert dark.min() < 17 < dark.max()  # text on both lines
