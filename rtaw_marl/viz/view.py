@@ -36,6 +36,10 @@ __all__ = ["ViewEpisode", "page", "write_view"]
 MAX_EPISODES = 2
 """Episodes a page shows side by side."""
 
+SCRIPTS = ("episode.js", "draw.js", "controls.js")
+"""The page's code (``rtaw_marl/viz/viewer/``), inlined in this order: the episodes'
+data, the drawing, the controls."""
+
 
 @dataclass(frozen=True)
 class ViewEpisode:
@@ -92,7 +96,7 @@ def page(
         _asset("page.html")
         .replace("__TITLE__", html.escape(title))
         .replace("__STYLE__", _asset("viewer.css"))
-        .replace("__SCRIPT__", _asset("viewer.js"))
+        .replace("__SCRIPT__", "\n".join(_asset(name) for name in SCRIPTS))
         .replace("__DATA__", text)
     )
 
