@@ -35,13 +35,13 @@ def episodes(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, 
         {"name": "designated"},
     )
     sim = build_sim(spec)
-    schedules = {}
+    schedules, eps = {}, []
     for name in POLICIES:
         policy = make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale)
-        run_episode(sim, policy, SEED)
+        ttd = run_episode(sim, policy, SEED).ttd
         schedules[name] = sim.schedule()
+        eps.append(ViewEpisode(name, schedules[name], {"TTD": ttd, "seed": SEED}))
     path = tmp_path_factory.mktemp("view") / "view.html"
-    eps = [ViewEpisode(n, s, {"TTD": 0}) for n, s in schedules.items()]
     write_view(path, sim.layout, eps, "test")
     return path, schedules
 

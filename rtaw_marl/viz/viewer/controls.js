@@ -160,6 +160,9 @@ async function main() {
     view.episodes.push(new Episode(meta, arrays));
   }
   view.T = Math.max(...view.episodes.map((e) => e.T));
+  el("summary").textContent = view.episodes
+    .map((e) => `${e.name}: ` + Object.entries(e.summary).map(([k, v]) => `${k} ${v}`).join(", "))
+    .join("\n");
   view.panels = view.episodes.map(makePanel);
   legend();
   controls();
