@@ -10,7 +10,7 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import SELECTION_SEEDS, seed_list, seed_value
-from rtaw_marl.training.logging import LOGGERS
+from rtaw_marl.training.logging_config import logger_option
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
 __all__ = [
@@ -233,7 +233,9 @@ class TrainConfig(SimGroups):
         collector: Collection settings.
         eval: Periodic greedy evaluation settings.
         imitation: The optional warm start by imitation.
-        logger: ``csv``, ``tensorboard`` or ``none``.
+        logger: Where the scalars go: a ``logger`` option (``csv``, ``tensorboard``,
+            ``mlflow``, ``wandb``, ``none``; :mod:`rtaw_marl.training.logging_config`) or
+            its name.
         resume: A checkpoint to continue from (``last.pt``). It must hold the same
             scenario (env, layout, navigator, tasks, eval seeds) and fewer frames
             than ``frames``.
@@ -265,7 +267,7 @@ class TrainConfig(SimGroups):
     collector: CollectorConfig = field(default_factory=CollectorConfig)
     eval: TrainEvalConfig = field(default_factory=TrainEvalConfig)
     imitation: ImitationConfig = field(default_factory=ImitationConfig)
-    logger: str = "csv"
+    logger: Any = "csv"
     resume: str | None = None
     resume_new_scenario: bool = False
     output_dir: str | None = None
@@ -281,8 +283,7 @@ class TrainConfig(SimGroups):
         at_least(self, "", 1, "frames", "torch_threads")
         if self.device not in DEVICES:
             raise ConfigError(f"device must be one of {', '.join(DEVICES)}, got {self.device!r}")
-        if self.logger not in LOGGERS:
-            raise ConfigError(f"logger must be one of {', '.join(LOGGERS)}, got {self.logger!r}")
+        self.logger = logger_option(self.logger)
         self._check_budgets()
 
     def _check_mix(self) -> None:

@@ -47,7 +47,8 @@ from rtaw_marl.training.interop import (
     acting_reward,
     standardize_acting_advantage,
 )
-from rtaw_marl.training.logging import RunLogger, quiet_torchrl_logs
+from rtaw_marl.training.logging import RunLogger, check_installed, quiet_torchrl_logs
+from rtaw_marl.utils.plain import as_plain
 from rtaw_marl.utils.runs import claim_folder
 from rtaw_marl.utils.signals import Interrupted, deferred_interrupt
 from rtaw_marl.viz.plots import plot_training_curve
@@ -204,7 +205,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history, nets[0].in_keys)
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
-    logger = RunLogger(run_dir, cfg.logger)
+    logger = RunLogger(run_dir, cfg.logger, config=as_plain(cfg))
     if cfg.init_actor is not None and progress.frames == 0:
         _init_actor(cfg, learner.actor_net)
     if cfg.imitation.teacher is not None and progress.frames == 0:
@@ -307,9 +308,9 @@ def _warm_start(
     if actor is not learner.actor_net:  # a GPU learner: bring the warm start over
         learner.actor_net.load_state_dict(actor.state_dict())
         learner.critic_net.load_state_dict(critic.state_dict())
+    # Before the first PPO frame: logged at frame 0, on their own axis (decisions).
     for row in rows:
-        logger.log({f"imitation/{k}": v for k, v in row.items() if k != "decisions"},
-                   row["decisions"])  # fmt: skip
+        logger.log({f"imitation/{k}": v for k, v in row.items()}, 0, axis="imitation/decisions")
 
 
 def _init_actor(cfg: TrainConfig, actor: torch.nn.Module) -> None:
@@ -361,6 +362,7 @@ def _check(cfg: TrainConfig) -> None:
             "interop=true trains on the AEC env's observation, which has no fleet summary: "
             "set model.fleet_summary=false"
         )
+    check_installed(cfg.logger)  # before any simulator is built
 
 
 def build_learner(cfg: TrainConfig, keys: TrainKeys, device: torch.device | None = None) -> Learner:
@@ -439,6 +441,16 @@ def _train_step(
     return {"train/reward_mean": raw_reward, "train/entropy_coeff": entropy_coeff, **stats}
 
 
+#: ClipPPOLoss outputs averaged over an update's minibatches -> their logged names.
+_LOSS_STATS = {
+    "loss_objective": "losses/objective",
+    "loss_critic": "losses/critic",
+    "loss_entropy": "losses/entropy",
+    "kl_approx": "losses/approx_kl",
+    "clip_fraction": "losses/clip_fraction",
+}
+
+
 def _update(
     data: TensorDictBase,
     learner: Learner,
@@ -456,7 +468,7 @@ def _update(
         standardize_acting_advantage(data, keys)
     buffer.extend(data.reshape(-1))
     clock.lap("time/gae_s")
-    totals = {"losses/objective": 0.0, "losses/critic": 0.0, "losses/entropy": 0.0}
+    totals = dict.fromkeys(_LOSS_STATS.values(), 0.0)
     steps = 0
     for _ in range(algo.epochs):
         for batch in buffer:
@@ -468,9 +480,8 @@ def _update(
             loss.backward()
             torch.nn.utils.clip_grad_norm_(learner.loss.parameters(), algo.max_grad_norm)
             learner.optim.step()
-            totals["losses/objective"] += out["loss_objective"].item()
-            totals["losses/critic"] += out["loss_critic"].item()
-            totals["losses/entropy"] += out["loss_entropy"].item()
+            for key, name in _LOSS_STATS.items():
+                totals[name] += out[key].item()
             steps += 1
     clock.lap("time/update_s")
     return {k: v / max(steps, 1) for k, v in totals.items()}

@@ -60,9 +60,9 @@ LOCK_NAME = ".rtaw.lock"
 MIN_FREE_BYTES = 32 * 2**20
 
 #: The length a run folder's path must leave for the paths written inside it (128
-#: bytes). Training's deepest is ``logs/train/scalars/time/.eval_checkpoint_s.csv.
-#: XXXXXXXX.tmp`` (59 bytes, a CSV trimmed on resume); TensorBoard's event files,
-#: which carry the host name, can reach about 120.
+#: bytes). Training's deepest are W&B's offline files, ``logs/wandb/offline-run-<date>_
+#: <time>-<id>/logs/debug-internal.log`` (71 bytes); TensorBoard's event files, which
+#: carry the host name, can reach about 120.
 RUN_PATH_ROOM = 128
 
 # Used where the system does not report its limits (os.pathconf); Linux's values.

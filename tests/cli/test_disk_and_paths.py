@@ -160,7 +160,7 @@ def test_train_output_dir_leaving_no_room_for_the_run_inside(cli, tmp_path: Path
 
 
 def test_a_run_folder_leaves_room_for_the_deepest_file_a_training_writes(tmp_path: Path) -> None:
-    deepest = "logs/train/scalars/time/.eval_checkpoint_s.csv.XXXXXXXX.tmp"
+    deepest = "logs/wandb/offline-run-20260101_000000-abcdefgh/logs/debug-internal.log"
     folder = check_writable_dir(_long_path(tmp_path, 4095 - runs.RUN_PATH_ROOM))
     (folder / deepest).parent.mkdir(parents=True)
     (folder / deepest).write_text("0,1\n")  # fits: the room is larger than it needs

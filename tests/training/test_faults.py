@@ -20,6 +20,7 @@ import rtaw_marl.training.evaluator as evaluator_module
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
+from rtaw_marl.training.logging import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import Estimate, _duration, train
 
 TINY = [
@@ -54,8 +55,9 @@ main()
 """
 
 
-def _steps(csv: Path) -> list[int]:
-    return [int(float(line.split(",")[0])) for line in csv.read_text().splitlines()]
+def _steps(run: Path, column: str | None = None) -> list[int]:
+    """The frames of the run's CSV rows (those holding ``column``)."""
+    return [int(row["frames"]) for row in read_metrics(run / METRICS_CSV, column)]
 
 
 @posix
@@ -89,11 +91,9 @@ def test_kill_inside_the_last_pt_write_then_resume(train_cfg, tmp_path: Path, ca
     frames = [row["frames"] for row in resumed.history]
     assert frames == [0, 512, 1024, 1536, 2048]
     assert load_checkpoint(checkpoints / "last.pt")["history"] == resumed.history
-    ttd_csv = next(p for p in (run / "logs").rglob("ttd.csv") if "eval" in p.parts)
-    assert _steps(ttd_csv) == frames
-    for csv in (run / "logs").rglob("*.csv"):
-        steps = _steps(csv)
-        assert steps == sorted(set(steps)), csv
+    assert _steps(run, "eval/ttd") == frames
+    steps = _steps(run)  # one row per step, in order
+    assert steps == sorted(set(steps))
     best = load_checkpoint(checkpoints / "best.pt")
     ttds = [row["ttd"] for row in resumed.history]
     # Ties never replace the best: it is the first evaluation that reached the minimum.

@@ -19,6 +19,7 @@ import pytest
 import torch
 
 from rtaw_marl.models.checkpoint import load_checkpoint
+from rtaw_marl.training.logging import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import compose_train
 
@@ -76,8 +77,7 @@ def ray_cluster():
 
 def _steps(run_dir: Path) -> list[int]:
     """Frames at each logged iteration (the CSV logger's steps)."""
-    (csv,) = run_dir.glob("logs/**/charts/fps.csv")
-    return [int(float(line.split(",")[0])) for line in csv.read_text().split()]
+    return [int(row["frames"]) for row in read_metrics(run_dir / METRICS_CSV, "charts/fps")]
 
 
 def test_two_actors_train_like_two_local_workers_and_resume(cli, ray_cluster, tmp_path: Path):

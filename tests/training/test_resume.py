@@ -16,6 +16,7 @@ import rtaw_marl.training.ppo as ppo
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.training.checkpoints import trim_csv_logs
+from rtaw_marl.training.logging import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import train
 
 TINY = [
@@ -24,29 +25,33 @@ TINY = [
 RTAW_TRAIN = Path(sys.executable).with_name("rtaw-train")
 
 
-def _steps(csv: Path) -> list[int]:
-    return [int(float(line.split(",")[0])) for line in csv.read_text().splitlines()]
+def _steps(run: Path, column: str | None = None) -> list[int]:
+    """The frames of the run's CSV rows (those holding ``column``)."""
+    return [int(row["frames"]) for row in read_metrics(run / METRICS_CSV, column)]
 
 
 def test_resume_after_a_kill_repeats_no_step(train_cfg, tmp_path: Path) -> None:
     run = tmp_path / "run"
     first = train(train_cfg([*TINY, "frames=1024"]), run)
-    logs = run / "logs"
-    reward = next(logs.rglob("reward_mean.csv"))
+    csv = run / METRICS_CSV
+    columns = csv.read_text().splitlines()[0].split(",")
+    reward = columns.index("train/reward_mean")
     # As if killed after logging two more batches but before their checkpoint, and in
     # the middle of a checkpoint write.
-    with reward.open("a") as fh:
-        fh.write("1536,0.5\n2048,0.5\n25")
+    with csv.open("a") as fh:
+        for frames in (1536, 2048):
+            cells = [str(frames)] + [""] * (len(columns) - 1)
+            cells[reward] = "0.5"
+            fh.write(",".join(cells) + "\n")
+        fh.write("25")
     stale = run / "checkpoints" / ".last.pt.abc123.tmp"
     stale.write_bytes(b"partial")
     train(train_cfg([*TINY, "frames=2048", f"resume={first.last_checkpoint}"]), run)
     assert not stale.exists()
-    for csv in logs.rglob("*.csv"):
-        if "imitation" in csv.parts:
-            continue
-        steps = _steps(csv)
-        assert steps == sorted(set(steps)), csv
-    assert _steps(reward) == [512, 1024, 1536, 2048]
+    steps = _steps(run)
+    assert steps == sorted(set(steps))
+    assert _steps(run, "train/reward_mean") == [512, 1024, 1536, 2048]
+    assert 0.5 not in [row["train/reward_mean"] for row in read_metrics(csv, "train/reward_mean")]
     history = load_checkpoint(run / "checkpoints" / "last.pt")["history"]
     assert [row["frames"] for row in history] == [0, 512, 1024, 1536, 2048]
 

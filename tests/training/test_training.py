@@ -160,7 +160,7 @@ def test_two_worker_collector(train_cfg, tmp_path: Path) -> None:
 def test_training_outputs(train_cfg, tmp_path: Path) -> None:
     result = train(train_cfg(TINY), tmp_path)
     assert (tmp_path / "training_curve.png").stat().st_size > 1000
-    assert (tmp_path / "logs" / "train" / "scalars" / "eval" / "ttd.csv").is_file()
+    assert (tmp_path / "logs" / "metrics.csv").is_file()
     ckpt = load_checkpoint(result.best_checkpoint)
     assert set(ckpt) >= {"model", "optimizer", "config", "versions", "frames", "command"}
     assert ckpt["versions"]["torchrl"] == "0.14.1"
@@ -185,7 +185,7 @@ def test_checkpoint_for_other_features_fails_clearly(tmp_path: Path) -> None:
     [
         ("algo.minibatch_size=100", "must be a multiple of algo.minibatch_size"),
         ("collector.envs_per_worker=7", "must be a multiple of"),
-        ("logger=wandb", "logger must be one of"),
+        ("logger=foo", "available: csv, mlflow, none, tensorboard, wandb"),
         ("resume=missing.pt", "checkpoint not found"),
         ("+model.embed_dmi=8", "unknown config key 'model.embed_dmi'"),
     ],
