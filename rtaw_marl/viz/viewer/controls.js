@@ -184,7 +184,11 @@ window.rtawView = {
   pause: () => { view.playing = false; },
   seek: (t) => { view.playing = false; setTime(t); render(); },
   setSpeed: (v) => { view.speed = v; },
-  setCamera: (scale, offX, offY) => { view.scale = scale; view.offX = offX; view.offY = offY; view.follow = false; render(); },
+  setCamera: (scale, offX, offY) => {
+    Object.assign(view, { scale, offX, offY, follow: false });
+    el("follow").checked = false;
+    render();
+  },
   search,
   cellToClient: (panel, x, y) => {
     const r = view.panels[panel].canvas.getBoundingClientRect();
