@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import sys
-from typing import Any, NoReturn
+from typing import Any
 
-from rtaw_marl.errors import ConfigError, RtawError
+from rtaw_marl.cli.plain import OneLineParser, exit_after
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.export import ExportCheckError, ExportConfig, export_policy
 
 __all__ = ["main", "parse", "parser", "run"]
@@ -33,18 +33,10 @@ _KINDS: dict[str, type] = {
 }  # fmt: skip
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (``error: ...``, exit status 2) like the other tools."""
-
-    def error(self, message: str) -> NoReturn:
-        print(f"error: {message}", file=sys.stderr)
-        sys.exit(2)
-
-
 def parser() -> argparse.ArgumentParser:
     """The command line of ``rtaw-export``."""
     keys = ", ".join(f.name for f in dataclasses.fields(ExportConfig))
-    p = _Parser(
+    p = OneLineParser(
         prog="rtaw-export",
         description=(__doc__ or "").splitlines()[0],
         epilog=f"keys: {keys} (docs/export.md)",
@@ -110,22 +102,7 @@ def run(argv: list[str] | None = None) -> int:
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors are one ``error:`` line and exit status 2, an
     export that disagrees with the Python policy exit status 1."""
-    try:
-        status = run(argv)
-    except ExportCheckError as exc:
-        print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
-        sys.exit(1)
-    except RtawError as exc:
-        print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
-        sys.exit(2)
-    except OSError as exc:
-        where = f": {exc.filename}" if exc.filename else ""
-        print(f"error: {exc.strerror or exc}{where}".splitlines()[0], file=sys.stderr)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        sys.exit(130)
-    sys.exit(status)
+    exit_after(run, argv, failures=(ExportCheckError,))
 
 
 if __name__ == "__main__":

@@ -20,9 +20,9 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import NoReturn
 
-from rtaw_marl.errors import ConfigError, RtawError
+from rtaw_marl.cli.plain import OneLineParser, exit_after
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.combine import combine, evaluated_policies, load_jobs
 from rtaw_marl.evaluation.combine_output import combined_table, write_combined
 from rtaw_marl.utils.runs import check_writable_dir
@@ -33,17 +33,9 @@ __all__ = ["main", "parser", "run"]
 REFERENCE = "mpdm"
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (``error: ...``, exit status 2) like the other tools."""
-
-    def error(self, message: str) -> NoReturn:
-        print(f"error: {message}", file=sys.stderr)
-        sys.exit(2)
-
-
 def parser() -> argparse.ArgumentParser:
     """The command line of ``rtaw-results``."""
-    p = _Parser(prog="rtaw-results", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="rtaw-results", description=__doc__.splitlines()[0])
     p.add_argument("paths", nargs="+", type=Path, help="sweep folders or results.json files")
     p.add_argument(
         "--output", type=Path,
@@ -93,16 +85,7 @@ def run(argv: list[str] | None = None) -> int:
 
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors are one ``error:`` line and exit status 2."""
-    try:
-        status = run(argv)
-    except (RtawError, OSError) as exc:
-        where = f": {exc.filename}" if isinstance(exc, OSError) and exc.filename else ""
-        print(f"error: {str(exc).splitlines()[0]}{where}", file=sys.stderr)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        sys.exit(130)
-    sys.exit(status)
+    exit_after(run, argv)
 
 
 if __name__ == "__main__":

@@ -30,26 +30,17 @@ import shlex
 import subprocess
 import sys
 from pathlib import Path
-from typing import NoReturn
 
-from rtaw_marl.errors import RtawError
+from rtaw_marl.cli.plain import OneLineParser, exit_after
 from rtaw_marl.training import retrain
 from rtaw_marl.training.zoo import RUNS, train_command
 
 __all__ = ["main", "parser", "run"]
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (``error: ...``, exit status 2) like the other tools."""
-
-    def error(self, message: str) -> NoReturn:
-        print(f"error: {message}", file=sys.stderr)
-        sys.exit(2)
-
-
 def parser() -> argparse.ArgumentParser:
     """The command line of ``rtaw-zoo``."""
-    p = _Parser(prog="rtaw-zoo", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="rtaw-zoo", description=__doc__.splitlines()[0])
     p.add_argument("names", nargs="*", help="zoo entries (default: all)")
     p.add_argument("--jobs", type=int, default=1, help="training runs at once")
     p.add_argument("--plus", action="store_true", help="only the RTAW+ entries")
@@ -110,22 +101,16 @@ def run(argv: list[str] | None = None) -> int:
     return 0
 
 
+def _failed_run(exc: BaseException) -> str:
+    cmd = exc.cmd if isinstance(exc, subprocess.CalledProcessError) else []
+    code = getattr(exc, "returncode", "?")
+    return f"{shlex.join(map(str, cmd))[:200]} failed ({code})"
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors are one ``error:`` line and exit status 2, a
     failed training run exit status 1 (its log is beside the run)."""
-    try:
-        status = run(argv)
-    except RtawError as exc:
-        print(f"error: {str(exc).splitlines()[0]}", file=sys.stderr)
-        sys.exit(2)
-    except subprocess.CalledProcessError as exc:
-        print(f"error: {shlex.join(map(str, exc.cmd))[:200]} failed ({exc.returncode})",
-              file=sys.stderr)  # fmt: skip
-        sys.exit(1)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        sys.exit(130)
-    sys.exit(status)
+    exit_after(run, argv, failures=(subprocess.CalledProcessError,), describe=_failed_run)
 
 
 if __name__ == "__main__":
