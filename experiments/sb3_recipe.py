@@ -83,8 +83,9 @@ def plot(curve: Curve, rules: dict[str, list[float]], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.5, 3.8), dpi=120)
-    steps, ttd = zip(*curve.episodes, strict=True)
-    ax.plot(steps, ttd, ".", color="tab:gray", alpha=0.3, ms=3, label="training episodes")
+    if curve.episodes:  # none when the run is shorter than an episode
+        steps, ttd = zip(*curve.episodes, strict=True)
+        ax.plot(steps, ttd, ".", color="tab:gray", alpha=0.3, ms=3, label="training episodes")
     steps, ttd = zip(*curve.greedy, strict=True)
     ax.plot(steps, ttd, marker="o", color="tab:blue", label="MaskablePPO (greedy)")
     for (name, ttds), style in zip(rules.items(), ("tab:orange", "tab:red"), strict=True):
@@ -116,6 +117,8 @@ def parse_settings(pairs: list[str]) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     """Train, draw the curve, evaluate; returns the numbers written to ``--json``."""
+    if args.steps < 1 or args.every < 1:
+        raise ConfigError(f"--steps and --every must be >= 1, got {args.steps} and {args.every}")
     recipe = RECIPE.with_overrides(**parse_settings(args.set))
     model = make_model(SCENARIO, recipe, seed=args.seed)
     curve = Curve(args.every)
