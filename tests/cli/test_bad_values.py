@@ -159,8 +159,11 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("train", ["algo.minibatch_size=0"], "algo.minibatch_size must be >= 1, got 0"),
     ("train", ["eval.every_frames=0"], "eval.every_frames must be >= 1, got 0"),
     ("train", ["torch_threads=0"], "torch_threads must be >= 1, got 0"),
-    ("train", ["logger=foo"],
-     "Could not find 'logger/foo'; available: csv, mlflow, none, tensorboard, wandb"),
+    (
+        "train",
+        ["logger=foo"],
+        "Could not find 'logger/foo'; available: csv, mlflow, none, tensorboard, wandb",
+    ),
     ("eval", ["torch_threads=0"], "torch_threads must be >= 1, got 0"),
     ("render", ["torch_threads=0"], "torch_threads must be >= 1, got 0"),
     ("render", ["fps=0"], "fps must be >= 1, got 0"),
