@@ -22,7 +22,8 @@ DEMO_RUN := runs/demo
 
 # Train RTAW+ briefly (a lookahead warm start, then PPO), then compare it and the shipped
 # generalist RTAW+ (one policy for every scenario) with MPDM, RBTS and lookahead on 20
-# evaluation seeds of the default scenario.
+# evaluation seeds of the default scenario; then a page to explore the generalist and
+# lookahead side by side, executed collision-free (open runs/demo/view.html).
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
 	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
@@ -30,6 +31,8 @@ demo: $(STAMP)
 	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
 		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
+	$(BIN)/rtaw-view navigator=sipp env.num_tasks=100 policy=[lookahead,pretrained] \
+		pretrained=generalist_plus output=$(DEMO_RUN)/view.html
 
 # LoRR's start kit (../shared), built once per machine into ~/.cache/rtaw_marl/lorr: a
 # few minutes the first time (apt-get installs cmake and Boost where missing), then

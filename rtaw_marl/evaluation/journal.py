@@ -28,6 +28,7 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.utils.atomic import disk_full_guard
+from rtaw_marl.utils.signals import signals_held
 
 __all__ = [
     "FORMAT",
@@ -139,11 +140,11 @@ class EpisodeJournal:
     def record(self, policy: str, seed: int, metrics: Mapping[str, float]) -> None:
         """Append one finished episode (durable when this returns)."""
         entry = {"policy": policy, "source": self.sources.get(policy), "seed": seed}
-        kept = self._kept()
-        # Counted first: a signal during the fsync (the slow part) leaves the line on
-        # disk, and the interrupt's message counts it.
-        self.episodes[(policy, seed)] = dict(metrics)
-        self._append({**entry, "metrics": dict(metrics)}, kept)
+        # Written and counted together: a signal in between would make the interrupt's
+        # message count a line that is not on disk (or miss one that is).
+        with signals_held():
+            self._append({**entry, "metrics": dict(metrics)}, self._kept())
+            self.episodes[(policy, seed)] = dict(metrics)
 
     def close(self) -> None:
         """Close the file (every line is already on disk); closing twice is harmless."""

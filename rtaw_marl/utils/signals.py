@@ -20,6 +20,7 @@ __all__ = [
     "Interrupted",
     "StopRequest",
     "deferred_interrupt",
+    "signals_held",
     "terminate_as_interrupt",
 ]
 
@@ -110,3 +111,20 @@ def deferred_interrupt() -> Iterator[StopRequest]:
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM (POSIX, main thread) until the block ends, then deliver.
+
+    For a few lines that must happen together or not at all, such as a journal line
+    written and counted: a signal that arrives inside runs its handler right after.
+    """
+    if not _main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)

@@ -187,7 +187,8 @@ def test_finished_episodes_survive_a_kill(tmp_path: Path) -> None:
     path = tmp_path / "results.episodes.jsonl"
     journal = EpisodeJournal(path, {"a": 1}, resume=False)
     with pytest.raises(KeyboardInterrupt):
-        evaluate(sim, {"mpdm": _KilledAfter(3)}, [0, 1, 2, 3], journal=journal)
+        # No warm-up: its untimed decisions would be the policy's first "episode" here.
+        evaluate(sim, {"mpdm": _KilledAfter(3)}, [0, 1, 2, 3], journal=journal, warm_up_decisions=0)
     journal.close()
     replay = EpisodeJournal(path, {"a": 1}, resume=True)
     assert sorted(replay.episodes) == [("mpdm", 0), ("mpdm", 1)]
