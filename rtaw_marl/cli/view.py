@@ -29,7 +29,7 @@ from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.runs import check_writable_file
-from rtaw_marl.viz.view import ViewEpisode, write_view
+from rtaw_marl.viz.view import ViewEpisode, file_size, write_view
 
 
 def _as_list(value: object) -> list[str]:
@@ -93,7 +93,7 @@ def run(cfg: DictConfig | ViewConfig) -> Path:
     path = write_view(output, layout, episodes, title, progress=note)
     for ep in episodes:
         print(f"{ep.name}: " + ", ".join(f"{k} {v}" for k, v in ep.summary.items()))
-    print(f"viewer: {path} ({path.stat().st_size / 1e6:.1f} MB)")
+    print(f"viewer: {path} ({file_size(path.stat().st_size)})")
     return path
 
 

@@ -31,7 +31,7 @@ from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.viz.episode_data import encode, episode_arrays, layout_cells, pack
 
-__all__ = ["ViewEpisode", "page", "write_view"]
+__all__ = ["ViewEpisode", "file_size", "page", "write_view"]
 
 MAX_EPISODES = 2
 """Episodes a page shows side by side."""
@@ -101,6 +101,11 @@ def page(
     )
 
 
+def file_size(size: int) -> str:
+    """``20.9 MB``, or ``48 kB`` below a tenth of a megabyte."""
+    return f"{size / 1e6:.1f} MB" if size >= 100_000 else f"{size / 1e3:.0f} kB"
+
+
 def write_view(
     path: str | Path,
     layout: Layout,
@@ -111,5 +116,5 @@ def write_view(
     """:func:`page` written atomically to ``path`` (an ``.html`` file)."""
     text = page(layout, episodes, title, progress)
     if progress is not None:
-        progress(f"writing {path} ({len(text) / 1e6:.1f} MB)")
+        progress(f"writing {path} ({file_size(len(text.encode('utf-8')))})")
     return atomic_write(path, lambda fh: fh.write(text.encode("utf-8")))
