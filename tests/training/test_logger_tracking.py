@@ -124,3 +124,21 @@ def _wandb_records(path: Path) -> list[tuple[str, dict[str, Any]]]:
         else:
             out.append((which, {}))
     return out
+
+
+def test_tensorboard_event_files_hold_the_metrics(train_cfg, tmp_path: Path) -> None:
+    """``logger=tensorboard``: event files under ``<run>/logs`` with the evaluation TTD at
+    the frames of the run's history and the PPO diagnostics at each update."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    run_dir = tmp_path / "run"
+    result = train(train_cfg([*TINY, "logger=tensorboard"]), run_dir)
+    (events,) = {p.parent for p in (run_dir / "logs").rglob("events.out.tfevents.*")}
+    acc = EventAccumulator(str(events))
+    acc.Reload()
+    ttd = acc.Scalars("eval/ttd")
+    assert [e.step for e in ttd] == [h["frames"] for h in result.history]
+    # TensorBoard stores float32.
+    assert [e.value for e in ttd] == pytest.approx([h["ttd"] for h in result.history], rel=1e-6)
+    for name in ("losses/approx_kl", "losses/clip_fraction"):
+        assert [e.step for e in acc.Scalars(name)] == [256, 512]
