@@ -29,6 +29,7 @@ from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.runs import check_writable_file
+from rtaw_marl.viz.episode_data import open_tasks
 from rtaw_marl.viz.view import ViewEpisode, file_size, write_view
 
 
@@ -43,7 +44,8 @@ def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpi
         "tasks finished": int(metrics.tasks_finished),
         "timesteps": schedule.horizon,
     }
-    return ViewEpisode(name, schedule, summary)
+    held = open_tasks(schedule, sim.tasks, sim.task_robot, sim.task_arrival, sim.task_assigned)
+    return ViewEpisode(name, schedule, summary, unfinished=held)
 
 
 def _saved(cfg: ViewConfig) -> tuple[object, list[ViewEpisode]]:

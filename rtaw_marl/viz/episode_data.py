@@ -9,8 +9,9 @@ they would not fit in a page. What the page gets instead, per episode:
   repeat, so this order deflates to 2.2 bits an entry at 10,000 robots, 18% less than
   timestep by timestep. The page rebuilds positions from keyframes it computes on load;
 * ``tasks``: ``int32 [K, 9]`` ``(ox, oy, dx, dy, robot, arrival, assigned, pickup,
-  delivered)`` of every task in the schedule, numbered by assignment order (the task ids
-  of LoRR's output format, :mod:`rtaw_marl.integrations.lorr.output`);
+  delivered)`` of every task in the schedule (and those robots still hold at the end,
+  :func:`open_tasks`, with ``T + 1`` for what did not happen), numbered by assignment
+  order (the task ids of LoRR's output format, :mod:`rtaw_marl.integrations.lorr.output`);
 * ``congestion``: ``[B, H * W]`` per time bin, how many timesteps a robot with a task
   stood still on each cell (a wait: blocked by traffic, or by its own plan);
 * ``delivered``: ``int32 [T + 1]`` tasks delivered at each timestep (the throughput).
@@ -42,6 +43,7 @@ __all__ = [
     "episode_arrays",
     "layout_cells",
     "move_codes",
+    "open_tasks",
     "pack",
 ]
 
@@ -151,10 +153,56 @@ def congestion(
     return counts.reshape(bins, -1), bin_size
 
 
+def open_tasks(
+    schedule: Schedule,
+    tasks: np.ndarray,
+    task_robot: np.ndarray,
+    task_arrival: np.ndarray,
+    task_assigned: np.ndarray,
+) -> np.ndarray:
+    """Rows of the tasks a robot holds at the end that the schedule leaves out.
+
+    A horizon episode's schedule (``navigator=pibt``) holds the tasks delivered by its
+    last timestep only; a robot still on a task would look idle. The simulator's
+    records hold every assignment: a robot with more assignments than scheduled tasks
+    holds its last one. Its pickup is the first timestep from the assignment at which
+    the robot stands on the origin (``T + 1`` if it never does); its delivery ``T + 1``.
+
+    Args:
+        schedule: The executed episode.
+        tasks: ``int [N, 4]`` every task of the episode (``WarehouseSim.tasks``).
+        task_robot: ``int [N]`` the robot each task went to, ``-1`` if none.
+        task_arrival: ``float [N]`` arrival times (NaN if the task never arrived).
+        task_assigned: ``float [N]`` assignment times (NaN if never assigned).
+
+    Returns:
+        ``int32 [J, 9]`` rows as :func:`episode_arrays` orders them; ``J <= M``.
+    """
+    robots, end = schedule.num_robots, schedule.horizon + 1
+    given = np.flatnonzero(task_robot >= 0)
+    held = np.bincount(task_robot[given], minlength=robots)
+    scheduled = np.bincount(schedule.task_robot, minlength=robots)
+    rows = []
+    for robot in np.flatnonzero(held > scheduled):
+        mine = given[task_robot[given] == robot]
+        k = mine[np.argmax(task_assigned[mine])]
+        at = int(task_assigned[k])
+        ox, oy = (int(v) for v in tasks[k, :2])
+        path = schedule.positions[at:, robot]
+        hit = np.flatnonzero((path[:, 0] == ox) & (path[:, 1] == oy))
+        pickup = at + int(hit[0]) if len(hit) else end
+        rows.append([*tasks[k], robot, int(task_arrival[k]), at, pickup, end])
+    return np.array(rows, dtype=np.int32).reshape(-1, 9)
+
+
 def episode_arrays(
-    layout: Layout, schedule: Schedule, bins: int = CONGESTION_BINS
+    layout: Layout,
+    schedule: Schedule,
+    bins: int = CONGESTION_BINS,
+    unfinished: np.ndarray | None = None,
 ) -> EpisodeArrays:
-    """The page's arrays of one executed episode on ``layout``."""
+    """The page's arrays of one executed episode on ``layout``, with the rows of
+    :func:`open_tasks` (``unfinished``) among its tasks when given."""
     positions = schedule.positions
     steps = positions.shape[0] - 1
     if steps < 1:
@@ -165,6 +213,9 @@ def episode_arrays(
         raise ConfigError(f"the schedule leaves the {width}x{height} grid of {layout.name!r}")
     moves = move_codes(positions)
     tasks = _by_assignment(schedule)
+    if unfinished is not None and len(unfinished):
+        tasks = np.concatenate([tasks, unfinished.astype(np.int32)])
+        tasks = tasks[np.argsort(tasks[:, 6], kind="stable")]
     bins = max(1, min(bins, steps))
     counts, bin_size = congestion(positions, moves, tasks, layout.obstacles.shape, bins)
     dtype = np.uint16 if bin_size <= np.iinfo(np.uint16).max else np.uint32

@@ -25,6 +25,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
@@ -49,11 +51,14 @@ class ViewEpisode:
         name: Its label (the policy).
         schedule: The executed episode.
         summary: Numbers shown with it (``{"TTD": 1234.0}``).
+        unfinished: Tasks robots still hold at the end that the schedule leaves out
+            (:func:`rtaw_marl.viz.episode_data.open_tasks`), ``int32 [J, 9]``.
     """
 
     name: str
     schedule: Schedule
     summary: dict[str, Any] = field(default_factory=dict)
+    unfinished: np.ndarray | None = None
 
 
 def _asset(name: str) -> str:
@@ -80,7 +85,7 @@ def page(
     packed = []
     for ep in episodes:
         note(f"packing {ep.name}: {ep.schedule.num_robots} robots, {ep.schedule.horizon} timesteps")
-        arrays = episode_arrays(layout, ep.schedule)
+        arrays = episode_arrays(layout, ep.schedule, unfinished=ep.unfinished)
         packed.append(pack(arrays, ep.name, ep.summary))
     data = {
         "version": 1,

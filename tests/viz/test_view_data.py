@@ -16,7 +16,13 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.integrations.lorr.output import read_schedule, write_episode
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
-from rtaw_marl.viz.episode_data import MOVES, episode_arrays, layout_cells, move_codes
+from rtaw_marl.viz.episode_data import (
+    MOVES,
+    episode_arrays,
+    layout_cells,
+    move_codes,
+    open_tasks,
+)
 from rtaw_marl.viz.view import ViewEpisode, page, write_view
 
 
@@ -154,3 +160,45 @@ def test_bad_saved_schedule(layout: Layout, tmp_path: Path) -> None:
     bad.write_text("{", encoding="utf-8")
     with pytest.raises(ConfigError, match="not a LoRR output file"):
         read_schedule(bad, layout)
+
+
+def test_open_tasks_are_the_last_assignments_the_schedule_leaves_out(
+    layout: Layout, schedule: Schedule
+) -> None:
+    """Robot 0 gets task 2 at t = 5 standing on its origin (pickup 5); robot 1 gets task
+    3 at t = 4 and never reaches its origin (pickup T + 1 = 6); task 4 was never given."""
+    tasks = np.array(
+        [[2, 0, 4, 0], [5, 0, 5, 2], [4, 0, 0, 0], [0, 3, 1, 1], [3, 3, 3, 3]], dtype=np.int64
+    )
+    robot = np.array([0, 1, 0, 1, -1])
+    arrival = np.array([0.0, 0.0, 2.0, 3.0, 4.0])
+    assigned = np.array([0.0, 1.0, 5.0, 4.0, np.nan])
+    rows = open_tasks(schedule, tasks, robot, arrival, assigned)
+    assert rows.tolist() == [[4, 0, 0, 0, 0, 2, 5, 5, 6], [0, 3, 1, 1, 1, 3, 4, 6, 6]]
+    arrays = episode_arrays(layout, schedule, unfinished=rows)
+    assert arrays.tasks[:, 6].tolist() == [0, 1, 4, 5]  # numbered by assignment time
+    assert arrays.delivered.sum() == 2  # the open tasks are not delivered
+    # Robot 1 holds task 3 from t = 4: its wait at (5, 2) from t = 4 is congestion now.
+    assert arrays.congestion.reshape(-1, 4, 6)[4, 2, 5] == 1
+
+
+def test_a_horizon_episode_shows_every_assigned_task(tmp_path: Path) -> None:
+    """PIBT, a LoRR problem, 40 timesteps: the schedule's tasks and the open ones are
+    every task the simulator assigned; each open pickup is at the task's origin."""
+    from rtaw_marl.evaluation.evaluate import run_episode
+    from rtaw_marl.policies import make_baseline
+    from rtaw_marl.scenarios.lorr import lorr_scenario
+    from rtaw_marl.sim.builder import build_sim
+    from tests.cli.test_eval_cli import _tiny_lorr_problem
+
+    sim = build_sim(lorr_scenario(_tiny_lorr_problem(tmp_path), horizon=40).spec())
+    run_episode(sim, make_baseline("mpdm", navigator=sim.navigator, scale=sim.layout.scale), 0)
+    schedule = sim.schedule()
+    rows = open_tasks(schedule, sim.tasks, sim.task_robot, sim.task_arrival, sim.task_assigned)
+    assert len(rows) >= 1
+    assert len(schedule.tasks) + len(rows) == int((sim.task_robot >= 0).sum())
+    for ox, oy, _, _, robot, _, at, pickup, delivered in rows.tolist():
+        assert delivered == schedule.horizon + 1
+        assert at <= pickup
+        if pickup <= schedule.horizon:
+            assert schedule.positions[pickup, robot].tolist() == [ox, oy]
