@@ -28,6 +28,7 @@ from rtaw_marl.evaluation.config import ViewConfig
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.layout import Layout
 from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.episode_data import open_tasks
 from rtaw_marl.viz.view import ViewEpisode, file_size, write_view
@@ -48,7 +49,7 @@ def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpi
     return ViewEpisode(name, schedule, summary, unfinished=held)
 
 
-def _saved(cfg: ViewConfig) -> tuple[object, list[ViewEpisode]]:
+def _saved(cfg: ViewConfig) -> tuple[Layout, list[ViewEpisode]]:
     from rtaw_marl.integrations.lorr.output import read_schedule
 
     paths = _as_list(cfg.schedule)
