@@ -21,7 +21,13 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, typed
+from rtaw_marl.cli.common import (
+    as_list,
+    exit_on_user_error,
+    hydra_entry,
+    policies_from_cfg,
+    typed,
+)
 from rtaw_marl.cli.episode import note, play_checked
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import ViewConfig
@@ -32,10 +38,6 @@ from rtaw_marl.sim.layout import Layout
 from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.episode_data import open_tasks
 from rtaw_marl.viz.view import ViewEpisode, file_size, write_view
-
-
-def _as_list(value: object) -> list[str]:
-    return [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
 
 
 def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpisode:
@@ -52,7 +54,7 @@ def _play(sim: WarehouseSim, name: str, policy: SimPolicy, seed: int) -> ViewEpi
 def _saved(cfg: ViewConfig) -> tuple[Layout, list[ViewEpisode]]:
     from rtaw_marl.integrations.lorr.output import read_schedule
 
-    paths = _as_list(cfg.schedule)
+    paths = as_list(cfg.schedule)
     for path in paths:
         if not Path(path).is_file():
             raise ConfigError(f"schedule={path}: no such file (a LoRR output file)")
@@ -83,7 +85,7 @@ def run(cfg: DictConfig | ViewConfig) -> Path:
                 f"navigator={cfg.navigator.name} moves robots independently (they pass "
                 "through each other); view with navigator=sipp, cbs or pibt"
             )
-        names = _as_list(cfg.policy)
+        names = as_list(cfg.policy)
         if len(set(names)) < len(names):
             raise ConfigError(f"policy names the same policy twice: {names}")
         sim = build_sim(cfg.sim_spec())

@@ -182,17 +182,21 @@ def open_tasks(
     given = np.flatnonzero(task_robot >= 0)
     held = np.bincount(task_robot[given], minlength=robots)
     scheduled = np.bincount(schedule.task_robot, minlength=robots)
-    rows = []
-    for robot in np.flatnonzero(held > scheduled):
-        mine = given[task_robot[given] == robot]
-        k = mine[np.argmax(task_assigned[mine])]
-        at = int(task_assigned[k])
-        ox, oy = (int(v) for v in tasks[k, :2])
-        path = schedule.positions[at:, robot]
-        hit = np.flatnonzero((path[:, 0] == ox) & (path[:, 1] == oy))
-        pickup = at + int(hit[0]) if len(hit) else end
-        rows.append([*tasks[k], robot, int(task_arrival[k]), at, pickup, end])
-    return np.array(rows, dtype=np.int32).reshape(-1, 9)
+    # Each robot's last assignment: the end of its run once sorted by robot, then time.
+    order = given[np.lexsort((task_assigned[given], task_robot[given]))]
+    by_robot = task_robot[order]
+    last = order[np.r_[by_robot[1:] != by_robot[:-1], True]] if len(order) else order
+    k = last[(held > scheduled)[task_robot[last]]]
+    robot, at = task_robot[k], task_assigned[k].astype(np.int64)
+    # The first timestep from the assignment at which the robot stands on the origin.
+    steps = np.arange(end)[:, None]
+    there = (schedule.positions[:, robot] == tasks[None, k, :2]).all(axis=-1) & (steps >= at)
+    pickup = np.where(there.any(axis=0), there.argmax(axis=0), end)
+    return (
+        np.column_stack([tasks[k], robot, task_arrival[k], at, pickup, np.full(len(k), end)])
+        .astype(np.int32)
+        .reshape(-1, 9)
+    )
 
 
 def episode_arrays(
