@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format bench clean lorr-kit browser
+.PHONY: demo test lint format bench clean lorr-kit browser docs
 
 $(STAMP): pyproject.toml
 	test -d $(VENV) || $(PYTHON) -m venv $(VENV)
@@ -67,6 +67,12 @@ format: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python experiments/bench_env.py
+
+# The documentation site (mkdocs.yml): docs/ and the API reference generated from the
+# docstrings (docs/api/), offline, into build/site. Browse it with
+# `python -m http.server -d build/site` (http://localhost:8000).
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict --site-dir build/site
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache

@@ -152,3 +152,93 @@ def usage_error(call: str, closed: bool = False) -> EnvUsageError:
     if closed:
         return EnvUsageError(f"{call} after close(): this env is closed; make a new one")
     return ResetNeededError(f"{call} before reset(): call env.reset() first")
+
+
+#: Extra (``pip install 'rtaw_marl[EXTRA]'``) -> the top-level modules it installs that
+#: rtaw_marl imports (pyproject.toml; PyYAML comes with omegaconf). The one table behind
+#: every "needs the ... extra" message: the console scripts' and the Python API's.
+EXTRAS: dict[str, tuple[str, ...]] = {
+    "cli": ("hydra", "omegaconf", "yaml", "tqdm", "matplotlib", "PIL"),
+    "train": ("torch", "tensordict", "torchrl"),
+    "export": ("onnx", "onnxscript", "onnxruntime"),
+    "lorr": ("pybind11",),
+}
+#: Extra -> its name in messages ("needs the training extra").
+EXTRA_NAMES: dict[str, str] = {
+    "cli": "command-line",
+    "train": "training",
+    "export": "export",
+    "lorr": "LoRR",
+}
+#: Extra -> the extras it installs too (``train = ["rtaw_marl[cli]", ...]``).
+_INCLUDES: dict[str, tuple[str, ...]] = {
+    "cli": (),
+    "train": ("cli",),
+    "export": ("train",),
+    "lorr": ("cli",),
+}
+
+
+def extra_modules(extra: str) -> tuple[str, ...]:
+    """The top-level modules ``pip install 'rtaw_marl[extra]'`` provides: those of the
+    extras it includes first (``train``: the ``cli`` extra's, then torch, tensordict,
+    torchrl)."""
+    included = tuple(m for other in _INCLUDES[extra] for m in extra_modules(other))
+    return included + EXTRAS[extra]
+
+
+def extra_message(what: str, extra: str, module: str) -> str:
+    """The one line saying that ``what`` needs ``extra``, e.g. ``"load_policy needs the
+    training extra ('torch' is not installed): pip install 'rtaw_marl[train]'"``.
+
+    Args:
+        what: The command or Python name that cannot run (``"rtaw-train"``,
+            ``"load_policy"``, ``"rtaw_marl.envs.torchrl"``).
+        extra: A key of :data:`EXTRAS`.
+        module: The missing module.
+    """
+    return (
+        f"{what} needs the {EXTRA_NAMES[extra]} extra ({module!r} is not installed): "
+        f"pip install 'rtaw_marl[{extra}]'"
+    )
+
+
+class MissingExtraError(RtawError, ModuleNotFoundError):
+    """A part of the Python API needs an extra that is not installed; the message names
+    the extra and the ``pip install`` line (:func:`extra_message`).
+
+    Also a ``ModuleNotFoundError`` whose ``name`` is the missing module, so code that
+    catches ``ImportError`` (or reads ``exc.name``) works as with the raw error.
+    """
+
+    def __init__(self, message: str, *, extra: str = "", name: str | None = None) -> None:
+        # Keyword arguments with defaults: pickle rebuilds an exception from its message
+        # alone (then restores name and extra), e.g. one raised in an evaluation worker.
+        super().__init__(message, name=name)
+        self.extra = extra
+
+
+def missing_extra(exc: ModuleNotFoundError, what: str, extra: str) -> ModuleNotFoundError:
+    """The error to raise for ``exc``, raised while importing what ``what`` needs.
+
+    The import guard of a module that needs an extra::
+
+        try:
+            import torch
+        except ModuleNotFoundError as exc:
+            raise missing_extra(exc, __name__, "train") from None
+
+    Args:
+        exc: The import's error.
+        what: The name the message gives (a module's ``__name__``, a function's name).
+        extra: The extra ``what`` needs (a key of :data:`EXTRAS`).
+
+    Returns:
+        A :class:`MissingExtraError` when the missing module is one ``extra`` installs;
+        else ``exc`` itself: a module missing from an installed extra is a broken
+        install, whose own error says more.
+    """
+    root = (exc.name or "").partition(".")[0]
+    if root not in extra_modules(extra):
+        return exc
+    return MissingExtraError(extra_message(what, extra, root), extra=extra, name=root)

@@ -101,6 +101,46 @@ def test_no_import_cycles_between_modules() -> None:
     assert not cycles, cycles
 
 
+BENCHMARKS = PACKAGE.parent / "benchmarks"
+
+
+def _imported_names(path: Path) -> list[tuple[str, str | None]]:
+    """``(module, name)`` for every import in ``path`` (``name`` None for ``import m``)."""
+    found: list[tuple[str, str | None]] = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found += [(a.name, None) for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            found += [(node.module, a.name) for a in node.names]
+    return found
+
+
+def test_the_package_never_imports_the_benchmarks_project() -> None:
+    """benchmarks/ sits beside the package and uses it; the package knows nothing of it
+    (and writes no docs page: the doc generators live there)."""
+    upward = [
+        f"{path.relative_to(PACKAGE.parent)} imports {module}"
+        for path in PACKAGE.rglob("*.py")
+        for module, _ in _imported_names(path)
+        if module == "benchmarks" or module.startswith("benchmarks.")
+    ]
+    assert not upward, upward
+
+
+def test_the_benchmarks_project_uses_only_public_names_of_the_package() -> None:
+    """Every name benchmarks/ takes from rtaw_marl is public: no ``_private`` module or
+    name, so the package can change its insides without breaking the results pages."""
+    private = [
+        f"{path.relative_to(PACKAGE.parent)}: {module}.{name or ''}"
+        for path in BENCHMARKS.rglob("*.py")
+        for module, name in _imported_names(path)
+        if module.startswith("rtaw_marl")
+        and (any(part.startswith("_") for part in module.split(".")) or (name or "x")[0] == "_")
+    ]
+    assert not private, private
+    assert list(BENCHMARKS.glob("*.py")), "the benchmarks project is where the scripts live"
+
+
 #: Modules installed only by the ``cli`` and ``train`` extras (pyproject.toml).
 EXTRAS = ("torch", "torchrl", "tensordict", "hydra", "omegaconf", "tqdm", "matplotlib", "PIL")
 

@@ -13,9 +13,10 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_environment_page_is_generated_from_docstring() -> None:
     """docs/environment.md is the env module docstring (regenerate with gen_env_doc.py)."""
     proc = subprocess.run(
-        [sys.executable, str(ROOT / "experiments" / "gen_env_doc.py"), "--check"],
+        [sys.executable, "-m", "benchmarks.scripts.gen_env_doc", "--check"],
         capture_output=True,
         text=True,
+        cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stderr
 
@@ -43,8 +44,9 @@ def test_configuration_page_documents_every_key() -> None:
     """docs/configuration.md's key reference is generated from the schemas, and every key
     of every option has a line in its schema's docstring (gen_config_doc.py)."""
     proc = subprocess.run(
-        [sys.executable, str(ROOT / "experiments" / "gen_config_doc.py"), "--check"],
+        [sys.executable, "-m", "benchmarks.scripts.gen_config_doc", "--check"],
         capture_output=True,
         text=True,
+        cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stderr

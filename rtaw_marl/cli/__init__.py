@@ -3,14 +3,17 @@
 The console scripts point at the wrappers here, not at the Hydra mains: ``pip install
 rtaw_marl`` installs the env alone, and a command whose extra is missing prints one
 ``error: ...`` line and exits with status 2 instead of a traceback. This module imports
-only the standard library.
+only the standard library and two tables that import nothing more: the commands'
+(:mod:`rtaw_marl.utils.commands`: :data:`NEEDS`, ``SUMMARIES``) and the extras'
+(:mod:`rtaw_marl.errors`: :data:`EXTRAS`, whose messages the Python API's
+:class:`~rtaw_marl.errors.MissingExtraError` shares).
 
 What each command needs:
 
 * ``rtaw-eval`` and ``rtaw-render``: the ``cli`` extra (Hydra, tqdm, matplotlib); the
   trained policies (``policy=pretrained``, ``policy=checkpoint``) also need the ``train`` extra.
 * ``rtaw-results``: the ``cli`` extra (matplotlib, PyYAML through omegaconf).
-* ``rtaw-train``, ``rtaw-study`` and ``rtaw-zoo``: the ``train`` extra (the ``cli`` extra
+* ``rtaw-train`` and ``rtaw-zoo``: the ``train`` extra (the ``cli`` extra
   plus torch, tensordict, torchrl).
 * ``rtaw-export``: the ``train`` extra; ``output=*.onnx`` also the ``export`` extra (onnx,
   onnxscript, onnxruntime; checked by :mod:`rtaw_marl.policies.export`).
@@ -22,6 +25,9 @@ import importlib
 import importlib.util
 import sys
 
+from rtaw_marl.errors import EXTRAS, extra_message
+from rtaw_marl.utils.commands import NEEDS
+
 __all__ = [
     "EXTRAS",
     "NEEDS",
@@ -30,44 +36,14 @@ __all__ = [
     "lorr_main",
     "render_main",
     "results_main",
-    "study_main",
     "train_main",
     "view_main",
     "zoo_main",
 ]
 
-#: Extra -> the top-level modules it installs that the commands import.
-EXTRAS: dict[str, tuple[str, ...]] = {
-    "cli": ("hydra", "omegaconf", "tqdm", "matplotlib", "PIL"),
-    "train": ("torch", "tensordict", "torchrl"),
-}
-_EXTRA_NAMES = {"cli": "command-line", "train": "training"}
-
-#: Command -> (the extra to name in the error, the modules it cannot start without).
-NEEDS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "eval": ("cli", ("hydra", "omegaconf", "tqdm")),
-    "render": ("cli", ("hydra", "omegaconf", "matplotlib", "PIL")),
-    "view": ("cli", ("hydra", "omegaconf", "tqdm")),
-    # Combines results.json files: plain argparse, a plot, the sweep's overrides.yaml.
-    "results": ("cli", ("matplotlib", "yaml")),
-    "train": ("train", EXTRAS["cli"] + EXTRAS["train"]),
-    # The paper's tables evaluate the shipped learned policies.
-    "study": ("train", EXTRAS["cli"] + EXTRAS["train"]),
-    # Retraining the shipped policies: rtaw-train's needs.
-    "zoo": ("train", EXTRAS["cli"] + EXTRAS["train"]),
-    # The kit's build needs pybind11 only for rtaw_marl's schedulers: checked there.
-    "lorr": ("cli", ("hydra", "omegaconf")),
-    # TorchScript needs torch only; .onnx checks the export extra itself.
-    "export": ("train", EXTRAS["train"]),
-}
-
 
 def _fail(tool: str, extra: str, missing: str, what: str = "") -> None:
-    print(
-        f"error: {tool}{what} needs the {_EXTRA_NAMES[extra]} extra ({missing!r} is not "
-        f"installed): pip install 'rtaw_marl[{extra}]'",
-        file=sys.stderr,
-    )
+    print(f"error: {extra_message(tool + what, extra, missing)}", file=sys.stderr)
     sys.exit(2)
 
 
@@ -119,11 +95,6 @@ def view_main() -> None:
 def train_main() -> None:
     """``rtaw-train`` (:mod:`rtaw_marl.cli.train`)."""
     _run("train")
-
-
-def study_main() -> None:
-    """``rtaw-study`` (:mod:`rtaw_marl.cli.study`)."""
-    _run("study")
 
 
 def zoo_main() -> None:

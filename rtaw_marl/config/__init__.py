@@ -9,15 +9,22 @@
 
 from __future__ import annotations
 
-from rtaw_marl.config.convert import (
-    CONF_DIR,
-    as_plain,
-    check_overrides,
-    compose,
-    config_error,
-    to_typed,
-)
-from rtaw_marl.config.store import GROUPS, register_configs
+from rtaw_marl.errors import missing_extra
+
+# Hydra and OmegaConf come with the command-line extra: without it, one error that names
+# it (errors.missing_extra), no traceback of a bare ModuleNotFoundError.
+try:
+    from rtaw_marl.config.convert import (
+        CONF_DIR,
+        as_plain,
+        check_overrides,
+        compose,
+        config_error,
+        to_typed,
+    )
+    from rtaw_marl.config.store import GROUPS, register_configs
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "cli") from None
 
 __all__ = [
     "CONF_DIR",

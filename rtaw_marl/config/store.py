@@ -18,7 +18,7 @@ import yaml
 from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
-from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, StudyConfig, ViewConfig
+from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, ViewConfig
 from rtaw_marl.integrations.lorr.config import LoRRConfig
 from rtaw_marl.models.config import MODELS
 from rtaw_marl.scenarios.lorr import lorr_value
@@ -51,7 +51,6 @@ APPS: dict[str, type] = {
     "train": TrainConfig,
     "render": RenderConfig,
     "view": ViewConfig,
-    "study": StudyConfig,
     "lorr": LoRRConfig,
 }
 

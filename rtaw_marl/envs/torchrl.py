@@ -40,10 +40,24 @@ from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
-import torch
-from tensordict import TensorDict, TensorDictBase
-from torchrl.data import Binary, Categorical, Composite, Unbounded
-from torchrl.envs import EnvBase
+
+from rtaw_marl.errors import (
+    ConfigError,
+    EnvUsageError,
+    InvalidActionError,
+    missing_extra,
+    usage_error,
+)
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDict, TensorDictBase
+    from torchrl.data import Binary, Categorical, Composite, Unbounded
+    from torchrl.envs import EnvBase
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.features import (
     ALL_KEYS,
@@ -54,7 +68,6 @@ from rtaw_marl.envs.features import (
     decision_features,
     feature_shapes,
 )
-from rtaw_marl.errors import ConfigError, EnvUsageError, InvalidActionError, usage_error
 from rtaw_marl.sim.builder import SimFactory, SimSpec
 from rtaw_marl.sim.config import SimBuffers
 from rtaw_marl.sim.inputs import draw_training_seed, seed_value

@@ -6,7 +6,7 @@ new spec), encodes the observation, creates a tensor for each reward, done flag 
 value, and deep-copies every observation to strip its action mask. With all robots in
 one group that is ``O(M)`` Python work per step whatever the env costs: about 30 ms of a
 32 ms step at ``M = 100``, and 135 ms at ``M = 1000`` for an env that does nothing
-(``experiments/bench_wrapper.py``).
+(``benchmarks/scripts/bench_wrapper.py``).
 
 :class:`WarehouseWrapper` is a ``PettingZooWrapper`` (same specs, keys, group and
 semantics) whose ``reset`` and ``step`` fill each key for all robots with one copy, from
@@ -29,11 +29,19 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import torch
 from pettingzoo import AECEnv
-from tensordict import TensorDictBase
-from torchrl.envs import PettingZooWrapper
-from torchrl.envs.libs.pettingzoo import MarlGroupMapType
+
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDictBase
+    from torchrl.envs import PettingZooWrapper
+    from torchrl.envs.libs.pettingzoo import MarlGroupMapType
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.observations import Features
 from rtaw_marl.envs.pettingzoo import raw_env

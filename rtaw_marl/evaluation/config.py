@@ -12,7 +12,7 @@ from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import seed_list, seed_value
 from rtaw_marl.utils.checks import at_least, check_fields
 
-__all__ = ["EvalConfig", "RenderConfig", "StudyConfig", "ViewConfig"]
+__all__ = ["EvalConfig", "RenderConfig", "ViewConfig"]
 
 
 @dataclass(kw_only=True)
@@ -171,53 +171,3 @@ class ViewConfig(SimGroups):
                 raise ConfigError(
                     f"{key} must be one name or a list of two (side by side), got {value!r}"
                 )
-
-
-@dataclass(kw_only=True)
-class StudyConfig:
-    """An ``rtaw-study`` run: a study's policies x scenarios x seeds, then its tables.
-
-    Attributes:
-        study: The study (``rtaw_marl.evaluation.studies.STUDIES``): ``table1_paper``,
-            ``table1_drain``, ``table2``, ``table2_hindsight``, ``transfer``,
-            ``navigators``, ``budget_gain``, ``lookahead_horizon``, ``analysis``.
-        seeds: Episode seeds; ``None``: the study's own (the evaluation seeds 0-19, the
-            selection seeds 1000-1019 for ``lookahead_horizon``).
-        workers: Evaluation processes (a study's settings run in parallel).
-        output: The run folder (``<study>.json`` and one episode journal per setting);
-            ``None``: the Hydra run folder.
-        resume: Take the episodes already journalled in ``output`` (a killed study).
-        docs: A docs folder (the repository's ``docs``); the stored results a study pairs
-            with are read from ``<docs>/data/``.
-        reuse: Take the rules' per-seed TTDs from ``<docs>/data/<study>.json`` instead of
-            running them (a rule's episode depends on the seed only); needs ``docs``.
-        reuse_learned: With ``reuse``, take the learned policies' stored TTDs too, so
-            that only labels missing from the stored result run (after a change that
-            affects one rule; valid only while the checkpoints and the code that plays
-            them are those of the stored run, so check that a sample reproduces).
-        write: Rewrite the study's section of its page in ``docs`` and its
-            ``<docs>/data/<study>.json``; needs ``docs``.
-    """
-
-    study: str = "table1_paper"
-    seeds: Any = None
-    workers: int = 1
-    output: str | None = None
-    resume: bool = False
-    docs: str | None = None
-    reuse: bool = False
-    reuse_learned: bool = False
-    write: bool = False
-
-    def __post_init__(self) -> None:
-        check_fields(self)
-        at_least(self, "", 1, "workers")
-        if self.seeds is not None:
-            if not isinstance(self.seeds, (list, tuple)) or not self.seeds:
-                raise ConfigError(f"seeds must be a non-empty list of integers, got {self.seeds}")
-            seed_list(self.seeds, "seeds")
-        for key in ("reuse", "write"):
-            if getattr(self, key) and self.docs is None:
-                raise ConfigError(f"{key}=true needs docs=FOLDER (the repository's docs)")
-        if self.reuse_learned and not self.reuse:
-            raise ConfigError("reuse_learned=true needs reuse=true")

@@ -27,6 +27,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.lorr import read_problem
+from rtaw_marl.sim.maps import resolve_path
 from rtaw_marl.utils.atomic import disk_full_guard
 from rtaw_marl.utils.signals import signals_held
 
@@ -79,7 +80,8 @@ def with_file_digests(setting: Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(value, Mapping):
             out[key] = with_file_digests(value)
         elif key == "path" and isinstance(value, str):
-            out[key] = file_digest(value)
+            # The file a reader loads (``builtin:NAME`` is a shipped map), not the string.
+            out[key] = file_digest(resolve_path(value))
         elif key == "problem" and isinstance(value, str):
             # A LoRR problem: the JSON and the map, agent and task files it names.
             problem = read_problem(value)

@@ -1,6 +1,6 @@
 """What a command reports (its tables and notes), printed and kept for its run folder.
 
-``rtaw-eval`` and ``rtaw-study`` print their tables with ``print``, which Hydra's job
+``rtaw-eval`` prints its tables with ``print``, which Hydra's job
 log (``eval.log``) never sees; a :class:`Transcript` prints each block to stdout as it
 comes and saves the same text beside the results file (``results.txt`` beside
 ``results.json``), atomically. Progress (bars, time estimates) goes to stderr and is

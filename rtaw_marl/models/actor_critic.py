@@ -6,10 +6,17 @@ last); the caller passes the tensordict key of each, which may be nested.
 
 from __future__ import annotations
 
-import torch
-from tensordict import TensorDictBase
-from tensordict.nn import TensorDictModule
-from torchrl.modules import MaskedCategorical, ProbabilisticActor, ValueOperator
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDictBase
+    from tensordict.nn import TensorDictModule
+    from torchrl.modules import MaskedCategorical, ProbabilisticActor, ValueOperator
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.models.checkpoint import Actor, Critic
 

@@ -43,10 +43,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tensordict
-import torch
-import torchrl
-from torch.torch_version import TorchVersion
+
+from rtaw_marl.errors import ConfigError, missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import tensordict
+    import torch
+    import torchrl
+    from torch.torch_version import TorchVersion
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 import rtaw_marl
 from rtaw_marl.envs.features import (
@@ -56,7 +64,6 @@ from rtaw_marl.envs.features import (
     ROBOT_FEATURES,
     TASK_FEATURES,
 )
-from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.config import MODELS, ModelConfig, RTAWConfig, RTAWPlusConfig
 from rtaw_marl.models.rtaw import RTAWActor, RTAWCritic
 from rtaw_marl.models.rtaw_plus import RTAWPlusActor, RTAWPlusCritic

@@ -25,8 +25,15 @@ No layer size depends on ``M`` or ``N``.
 
 from __future__ import annotations
 
-import torch
-from torch import nn
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from torch import nn
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 __all__ = ["RTAWActor", "RTAWCritic", "RTAWEncoder"]
 

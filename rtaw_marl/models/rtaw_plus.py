@@ -30,8 +30,15 @@ Linear(hidden, 1).
 
 from __future__ import annotations
 
-import torch
-from torch import nn
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from torch import nn
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.features import (
     FLEET_FEATURES,

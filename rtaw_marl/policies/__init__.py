@@ -3,7 +3,8 @@ reference, and trained RTAW networks, all behind one interface (:class:`Policy`:
 ``name``, ``reset(seed)``, ``act(observation)``, ``act_sim(sim)``).
 
 ``load_policy`` and ``NetworkPolicy`` (:mod:`.network`) need torch; they are imported
-on first use, so ``import rtaw_marl.policies`` stays light.
+on first use, so ``import rtaw_marl.policies`` stays light. Without the ``train`` extra,
+using either raises one :class:`~rtaw_marl.errors.MissingExtraError` naming it.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from rtaw_marl.errors import ConfigError, unknown_name
+from rtaw_marl.errors import ConfigError, missing_extra, unknown_name
 from rtaw_marl.policies.base import Policy, simulator_of
 from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, RandomPolicy
 from rtaw_marl.policies.batch import BatchAssignment
@@ -105,9 +106,12 @@ def make_baseline(
 
 
 def __getattr__(name: str) -> Any:
-    # load_policy and NetworkPolicy need torch: import it on first use only.
+    # load_policy and NetworkPolicy need torch: import it on first use only, and name the
+    # extra to install rather than the module that was missing.
     if name in _NETWORK:
-        from rtaw_marl.policies import network
-
+        try:
+            from rtaw_marl.policies import network
+        except ModuleNotFoundError as exc:
+            raise missing_extra(exc, name, "train") from None
         return getattr(network, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

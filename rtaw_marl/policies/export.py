@@ -34,10 +34,17 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
-from torch import nn
 
-from rtaw_marl.errors import ConfigError, RtawError
+from rtaw_marl.errors import EXTRAS, ConfigError, RtawError, extra_message, missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from torch import nn
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
+
 from rtaw_marl.models.checkpoint import Actor, library_versions, load_checkpoint
 from rtaw_marl.models.rtaw import RTAWActor
 from rtaw_marl.policies.export_check import CheckReport, Runner, check_exported, record_decisions
@@ -291,12 +298,9 @@ def export_policy(source: str | Path, config: ExportConfig) -> tuple[Path, Check
 
 def _need_onnx() -> None:
     """Refuse ``.onnx`` in one line when the ``export`` extra is not installed."""
-    for module in ("onnx", "onnxscript", "onnxruntime"):
+    for module in EXTRAS["export"]:
         if importlib.util.find_spec(module) is None:
-            raise ConfigError(
-                f"output=*.onnx needs the export extra ({module!r} is not installed): "
-                "pip install 'rtaw_marl[export]'"
-            )
+            raise ConfigError(extra_message("output=*.onnx", "export", module))
 
 
 def specification(source: str | Path, path: Path, actor: Actor, fmt: str) -> dict[str, Any]:

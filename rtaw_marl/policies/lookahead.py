@@ -34,7 +34,7 @@ from rtaw_marl.policies.baselines import BaselinePolicy, free_times
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.distances import DistanceModel
 
-__all__ = ["Hungarian", "Lookahead", "lookahead_costs"]
+__all__ = ["Hungarian", "Lookahead", "lookahead_costs", "rollout_distances"]
 
 
 def lookahead_costs(
@@ -174,7 +174,7 @@ class Lookahead(BaselinePolicy):
         """The choice from what the observation holds, on both paths: ``float32 [M, 3]``
         robot rows (so near-ties are decided alike), the acting row, the queue's cells."""
         cells = np.rint(robots[:, :2].astype(np.float64) * scale).astype(np.int64)
-        ends = _end_distances(navigator, cells, rows, mask)
+        ends = rollout_distances(navigator, cells, rows, mask)
         lengths = np.zeros(len(mask))
         lengths[mask] = navigator.distance(rows[mask, :2], rows[mask, 2:])
         free = free_times(robots[:, 2], scale)  # "now" is 0
@@ -220,7 +220,7 @@ class Hungarian(BaselinePolicy):
         return self._nearest(dist[robot], mask)
 
 
-def _end_distances(
+def rollout_distances(
     navigator: DistanceModel, robot_xy: np.ndarray, rows: np.ndarray, mask: np.ndarray
 ) -> np.ndarray:
     """``float64 [M + N, N]``: distances from each robot's cell, then from each queued

@@ -12,7 +12,8 @@ seeds and the shipped learned policies that belong to it. The same name works ev
   ``conf/row/<row>.yaml``, generated as well);
 * LoRR 2024 problem files: ``lorr_scenario(path)`` and ``rtaw-eval scenario=lorr
   tasks.problem=PATH`` (:mod:`rtaw_marl.scenarios.lorr`);
-* the studies of :mod:`rtaw_marl.evaluation.studies`, which produce docs/results.md.
+* the benchmarks project beside the package (`benchmarks/studies.py`), whose studies
+  produce docs/results.md.
 
 ``tests/scenarios/test_scenarios.py`` fails when a generated YAML file drifts from this
 registry, and checks that Hydra and Python build the same simulator for every name.

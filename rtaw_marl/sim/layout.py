@@ -33,6 +33,7 @@ import numpy as np
 from scipy import ndimage
 
 from rtaw_marl.errors import LayoutError
+from rtaw_marl.sim.maps import resolve_path
 
 __all__ = [
     "LAYOUT_FORMATS",
@@ -296,12 +297,16 @@ def load_layout(path: str | Path) -> Layout:
     """Load a layout file, choosing the parser by extension (:data:`LAYOUT_FORMATS`:
     ``.cfg``, ``.map``, ``.txt``/``.grid`` ASCII).
 
+    Args:
+        path: The file, or ``builtin:NAME`` for a shipped map (:mod:`rtaw_marl.sim.maps`).
+
     Raises:
+        ConfigError: ``builtin:`` names no shipped map (the message lists them).
         LayoutError: The file is missing, its extension names no known format (a
             ``.scen`` or ``.json`` file is not read as an ASCII map), or it is malformed
             (the message names the line, and the column of a bad cell).
     """
-    path = Path(path)
+    path = resolve_path(path)
     if not path.is_file():
         raise LayoutError(f"layout file not found: {path}")
     suffix = path.suffix.lower()

@@ -30,6 +30,7 @@ import numpy as np
 
 from rtaw_marl.errors import ConfigError, TaskFileError
 from rtaw_marl.sim.layout import Layout, load_layout
+from rtaw_marl.sim.maps import resolve_path
 from rtaw_marl.sim.tasks import TaskStream
 
 __all__ = [
@@ -98,11 +99,16 @@ class LoRRProblem:
 def read_problem(path: str | Path) -> LoRRProblem:
     """Read a LoRR 2024 problem JSON (its map, agent and task files must exist).
 
+    Args:
+        path: The JSON file, or ``builtin:NAME`` for a shipped problem
+            (:mod:`rtaw_marl.sim.maps`; ``builtin:random_32_32_20_100.json``).
+
     Raises:
+        ConfigError: ``builtin:`` names no shipped map (the message lists them).
         TaskFileError: The file is missing, not JSON, misses a key, or names a file that
             does not exist; the message names the file and the key.
     """
-    path = Path(path)
+    path = resolve_path(path)
     if not path.is_file():
         raise TaskFileError(f"LoRR problem file not found: {path}")
     try:

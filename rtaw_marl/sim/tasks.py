@@ -11,7 +11,9 @@ tasks for the same seed whatever it decides.
     Origin drawn from a Gaussian (``sigma`` cells) around a pickup centre chosen
     uniformly, destination likewise around a delivery centre. Draws are rounded to the
     nearest cell; draws off the grid, on obstacles or outside the main region are
-    redrawn (a truncated Gaussian). Defaults are the original RTAW code's five centres.
+    redrawn (a truncated Gaussian). Defaults are the original RTAW code's five centres,
+    written for its 60x60 area and scaled to other layouts (:func:`default_centres`), so
+    they spread over the whole map; given centres are the layout's own cells.
 ``clustered``
     Like ``designated`` but around ``num_clusters`` centres drawn per episode on free cells.
 ``stations``
@@ -36,9 +38,12 @@ import numpy as np
 
 from rtaw_marl.errors import ConfigError, TaskFileError
 from rtaw_marl.sim.layout import MAX_COORDINATE, Layout
+from rtaw_marl.sim.maps import resolve_path
 from rtaw_marl.utils.checks import check_number
 
 __all__ = [
+    "AREA_SLACK",
+    "DEFAULT_AREA",
     "DEFAULT_CENTRES",
     "POC_TASKS",
     "TWO_TASKS",
@@ -48,11 +53,21 @@ __all__ = [
     "RandomTasks",
     "StationTasks",
     "TaskStream",
+    "default_centres",
     "load_task_csv",
 ]
 
-#: Pickup/delivery centres of the original RTAW code (60x60 area), ``(x, y)``.
+#: Pickup/delivery centres of the original RTAW code, ``(x, y)``, written for its 60x60
+#: area (:data:`DEFAULT_AREA`); :func:`default_centres` places them on a layout.
 DEFAULT_CENTRES: tuple[tuple[int, int], ...] = ((11, 10), (29, 29), (48, 16), (48, 29), (4, 54))
+
+#: ``(W, H)`` of the area :data:`DEFAULT_CENTRES` are written for.
+DEFAULT_AREA: tuple[int, int] = (60, 60)
+
+#: A layout side up to this many cells longer than the area's keeps the default centres as
+#: written: the original code drew them unchanged on its 64x64 maps (their 60x60 area
+#: inside), so every 60x60 and 64x64 setting keeps the task streams of its shipped results.
+AREA_SLACK = 4
 
 #: The paper's proof-of-concept tasks (appendix, Table "task list"), in arrival order.
 POC_TASKS: tuple[tuple[int, int, int, int], ...] = (
@@ -112,40 +127,61 @@ class DesignatedTasks(TaskStream):
     """Gaussian pickup and delivery regions around fixed centres.
 
     Args:
-        pickup_centres: ``(x, y)`` centres of the pickup regions.
-        delivery_centres: ``(x, y)`` centres of the delivery regions.
-        sigma: Standard deviation of each region in cells.
+        pickup_centres: ``(x, y)`` centres of the pickup regions, cells of the layout
+            used as given; ``None``: :func:`default_centres`, placed on each layout.
+        delivery_centres: ``(x, y)`` centres of the delivery regions, likewise.
+        sigma: Standard deviation of each region in cells (on every layout size).
     """
 
     def __init__(
         self,
-        pickup_centres: Sequence[Sequence[float]],
-        delivery_centres: Sequence[Sequence[float]],
+        pickup_centres: Sequence[Sequence[float]] | None,
+        delivery_centres: Sequence[Sequence[float]] | None,
         sigma: float,
     ) -> None:
-        self.pickup_centres = _centres(pickup_centres, "pickup_centres")
-        self.delivery_centres = _centres(delivery_centres, "delivery_centres")
+        #: The given centres ``float64 [K, 2]``, or ``None``: the default ones.
+        self.pickup_centres = (
+            None if pickup_centres is None else _centres(pickup_centres, "pickup_centres")
+        )
+        self.delivery_centres = (
+            None if delivery_centres is None else _centres(delivery_centres, "delivery_centres")
+        )
         check_number("tasks.sigma", sigma, above=0)
         self.sigma = float(sigma)
 
-    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
-        main = np.zeros(layout.obstacles.shape, dtype=bool)
-        main[layout.main_cells[:, 1], layout.main_cells[:, 0]] = True
-        for name, centres in (("pickup", self.pickup_centres), ("delivery", self.delivery_centres)):
-            outside = ~layout.in_bounds(np.round(centres).astype(np.int64))
+    def centres(self, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
+        """The pickup and delivery centres ``float64 [K, 2]`` used on ``layout``.
+
+        Raises:
+            ConfigError: A given centre lies outside ``layout`` (given centres are never
+                moved or scaled).
+        """
+        out = []
+        for name, given in (("pickup", self.pickup_centres), ("delivery", self.delivery_centres)):
+            if given is None:
+                out.append(default_centres(layout))
+                continue
+            outside = ~layout.in_bounds(np.round(given).astype(np.int64))
             if outside.any():
-                c = centres[int(np.flatnonzero(outside)[0])]
+                c = given[int(np.flatnonzero(outside)[0])]
                 raise ConfigError(
                     f"designated {name} centre ({c[0]:g}, {c[1]:g}) is outside layout "
                     f"{layout.name!r} ({layout.width}x{layout.height})"
                 )
-        origin = self._draw(rng, layout, main, self.pickup_centres, count)
-        dest = self._draw(rng, layout, main, self.delivery_centres, count)
+            out.append(given)
+        return out[0], out[1]
+
+    def generate(self, rng: np.random.Generator, layout: Layout, count: int) -> np.ndarray:
+        main = np.zeros(layout.obstacles.shape, dtype=bool)
+        main[layout.main_cells[:, 1], layout.main_cells[:, 0]] = True
+        pickup, delivery = self.centres(layout)
+        origin = self._draw(rng, layout, main, pickup, count)
+        dest = self._draw(rng, layout, main, delivery, count)
         same = np.flatnonzero((origin == dest).all(axis=1))
         for _ in range(_MAX_REDRAWS):
             if not same.size:
                 return np.concatenate([origin, dest], axis=1)
-            dest[same] = self._draw(rng, layout, main, self.delivery_centres, same.size)
+            dest[same] = self._draw(rng, layout, main, delivery, same.size)
             same = same[(origin[same] == dest[same]).all(axis=1)]
         raise ConfigError(
             f"designated tasks: cannot draw a destination different from origin "
@@ -177,6 +213,45 @@ class DesignatedTasks(TaskStream):
             f"designated centre ({c[0]:g}, {c[1]:g}) has no reachable free cell within a few "
             f"sigma={self.sigma:g} on layout {layout.name!r}"
         )
+
+
+def default_centres(layout: Layout) -> np.ndarray:
+    """:data:`DEFAULT_CENTRES` placed on ``layout``, ``float64 [5, 2]``.
+
+    Along a side of 60 to 64 cells (:data:`DEFAULT_AREA` plus :data:`AREA_SLACK`: the
+    grids the centres were made for) a coordinate stays as written, so those layouts
+    keep their task streams. Along any other side it is scaled in proportion, cell
+    centre to cell centre (``x' = (x + 0.5) * W / 60 - 0.5``), so the five regions cover
+    the same share of a 161x63 map as of a 60x60 one instead of its first 60 columns.
+    A scaled centre whose nearest cell is not in the layout's main region (an obstacle, a
+    small region) moves to the nearest main-region cell (Euclidean; ties go to the lowest
+    row, then the lowest column), so every region has free cells around its centre.
+
+    Raises:
+        ConfigError: The layout has no free cell.
+    """
+    centres = np.array(DEFAULT_CENTRES, dtype=np.float64)
+    size = np.array([layout.width, layout.height], dtype=np.float64)
+    area = np.array(DEFAULT_AREA, dtype=np.float64)
+    keep = (size >= area) & (size <= area + AREA_SLACK)
+    if keep.all():
+        # Untouched (no snapping either): the streams of 60x60 and 64x64 layouts.
+        return centres
+    scaled = np.where(keep, centres, (centres + 0.5) * size / area - 0.5)
+    cells = layout.main_cells
+    if not len(cells):
+        raise ConfigError(f"designated tasks: layout {layout.name!r} has no free cell")
+    in_main = np.zeros(layout.obstacles.shape, dtype=bool)
+    in_main[cells[:, 1], cells[:, 0]] = True
+    nearest = np.rint(scaled).astype(np.int64)
+    ok = layout.in_bounds(nearest)
+    ok[ok] = in_main[nearest[ok, 1], nearest[ok, 0]]
+    for i in np.flatnonzero(~ok):
+        # main_cells is in row-major order and argmin takes the first minimum: the
+        # lowest row, then the lowest column, among equally near cells.
+        d2 = ((cells - scaled[i]) ** 2).sum(axis=1)
+        scaled[i] = cells[int(d2.argmin())]
+    return scaled
 
 
 class ClusteredTasks(TaskStream):
@@ -263,11 +338,16 @@ def load_task_csv(path: str | Path) -> FixedTasks:
     """Read a task list from a CSV file with header ``ox,oy,dx,dy`` (UTF-8; a leading
     byte-order mark, as spreadsheet programs write, is allowed).
 
+    Args:
+        path: The file; ``builtin:NAME`` is resolved like every input path
+            (:func:`rtaw_marl.sim.maps.resolve_path`), though no task CSV is shipped.
+
     Raises:
+        ConfigError: ``builtin:`` names no shipped map (the message lists them).
         TaskFileError: The file is missing, is not UTF-8 text or not CSV, has no such
             header, or a row is malformed or out of range.
     """
-    path = Path(path)
+    path = resolve_path(path)
     if not path.is_file():
         raise TaskFileError(f"task file not found: {path}")
     rows: list[list[int]] = []

@@ -17,14 +17,20 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import torch
-from tensordict import TensorDictBase
-from torchrl.data import LazyTensorStorage, SamplerWithoutReplacement, TensorDictReplayBuffer
-from torchrl.objectives import ClipPPOLoss
-from torchrl.objectives.value import GAE
-from tqdm import tqdm
+from rtaw_marl.errors import ConfigError, missing_extra
 
-from rtaw_marl.errors import ConfigError
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDictBase
+    from torchrl.data import LazyTensorStorage, SamplerWithoutReplacement, TensorDictReplayBuffer
+    from torchrl.objectives import ClipPPOLoss
+    from torchrl.objectives.value import GAE
+    from tqdm import tqdm
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
+
 from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.checkpoint import Actor, Critic, build_networks, load_networks
 from rtaw_marl.scenarios.mix import mix_specs

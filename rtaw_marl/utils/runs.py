@@ -6,7 +6,7 @@ id); :func:`claim_folder` makes that a guarantee for every folder, including one
 user names: it takes an exclusive ``flock`` on ``<folder>/.rtaw.lock`` for the run's
 lifetime (:func:`claim_file`: on ``.<name>.lock`` beside an output file). The kernel
 drops the lock when the process dies, however it dies, so a killed run never leaves
-its folder locked.
+its folder locked; a run that ends deletes its lock file, so none is left behind.
 
 Before that, a path is checked as the later writes will need it, so a bad one costs
 one line instead of a finished evaluation or a training run:
@@ -320,19 +320,33 @@ def claim_file(
 
 @contextmanager
 def _hold(lock_path: Path, name: str) -> Iterator[None]:
+    """Hold ``lock_path`` (``flock``) for the body; the lock file is gone afterwards.
+
+    The holder deletes the file before it unlocks, so a process that opened it in the
+    meantime may lock a file no longer on disk: after locking, the inode on disk must be
+    the one locked, else it tries again on the new file.
+    """
     if fcntl is None:
         yield
         return
     kept = f"the run did not start and {name} was left as it was"
-    with _open_lock(lock_path, name, kept) as lock:
+    for _ in range(_LOCK_TRIES):
+        lock = _open_lock(lock_path, name, kept)
         try:
             fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             lock.seek(0)
             holder = lock.read().strip() or "?"
+            lock.close()
             raise ConfigError(
                 f"{name} is in use by another running process (pid {holder}); choose another one"
             ) from None
+        if _same_file(lock, lock_path):
+            break
+        lock.close()  # its holder deleted it after we opened it: lock the new one
+    else:
+        raise ConfigError(f"{name}: could not take its lock file {lock_path}")
+    with lock:
         # The guard covers the pid write only: an error of the run itself (the body)
         # must pass through unrenamed.
         with disk_full_guard(lock_path, kept):
@@ -343,7 +357,20 @@ def _hold(lock_path: Path, name: str) -> Iterator[None]:
         try:
             yield
         finally:
+            lock_path.unlink(missing_ok=True)  # still locked: nobody holds it meanwhile
             fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+
+
+#: Attempts at locking a lock file that its holder deletes meanwhile.
+_LOCK_TRIES = 100
+
+
+def _same_file(lock: TextIO, lock_path: Path) -> bool:
+    """Whether the open ``lock`` is the file at ``lock_path`` now (not one deleted)."""
+    try:
+        return os.stat(lock_path).st_ino == os.fstat(lock.fileno()).st_ino
+    except FileNotFoundError:
+        return False
 
 
 def _open_lock(lock_path: Path, name: str, kept: str) -> TextIO:

@@ -20,7 +20,7 @@ import pytest
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.errors import LayoutError, RtawError, TaskFileError
 from rtaw_marl.evaluation import evaluate
-from rtaw_marl.evaluation.config import EvalConfig, StudyConfig
+from rtaw_marl.evaluation.config import EvalConfig
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.layout import open_grid
@@ -51,7 +51,6 @@ BASE = {
     "eval": ["scenario=poc", "progress=false"],
     "train": ["scenario=poc", "progress=false"],
     "render": ["scenario=poc"],
-    "study": ["study=transfer"],
 }
 
 _WALLED_RUN = [
@@ -96,7 +95,6 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
         """cannot parse the override 'layout.path=/tmp/ü/map.txt': a value with non-ASCII """
         """characters must be quoted, e.g. 'layout.path="/tmp/ü/map.txt"'""",
     ),
-    ("study", ["seeds=[2,2]"], "seeds lists a seed more than once: 2 (2 times)"),
     ("train", ["seed=-1"], "seed must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[-1]"], "eval.seeds[0] must be an integer >= 0, got -1"),
     ("train", ["eval.seeds=[]"], "eval.seeds must name at least one seed"),
@@ -228,11 +226,6 @@ PYTHON_CASES: list[tuple[str, Callable[[], object], str]] = [
         "eval_seeds_repeated",
         lambda: EvalConfig(**_groups(), seeds=[3, 3]),
         "seeds lists a seed more than once: 3 (2 times)",
-    ),
-    (
-        "study_seeds_repeated",
-        lambda: StudyConfig(seeds=[0, 1, 0]),
-        "seeds lists a seed more than once: 0 (2 times)",
     ),
     (
         "evaluate_seeds_repeated",

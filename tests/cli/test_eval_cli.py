@@ -17,7 +17,7 @@ from scipy import stats as scipy_stats
 
 from rtaw_marl.cli.common import typed
 from rtaw_marl.cli.eval import run
-from rtaw_marl.config import CONF_DIR, compose, to_typed
+from rtaw_marl.config import CONF_DIR, compose
 from rtaw_marl.sim.builder import build_sim
 
 GROUPS = ("env", "layout", "navigator", "tasks", "scenario", "row", "experiment")
@@ -361,22 +361,6 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     assert cfg.env.episode_mode == "paper"
     assert list(cfg.policy) == ["mpdm", "rbts", "lookahead", "hungarian", "hindsight", "pretrained"]
     assert list(cfg.seeds) == list(range(20))
-
-
-def test_table1_experiment_is_the_study_of_table_one() -> None:
-    """Each job of experiment=table1 evaluates the setting, seeds and shipped policies of
-    that row of the table1_paper study (the sweep is the same evaluation on a cluster)."""
-    from rtaw_marl.evaluation.studies import STUDIES
-    from rtaw_marl.scenarios import ROWS, SCENARIOS
-
-    cells = {c.key: c for c in STUDIES["table1_paper"].cells(list(range(20)))}
-    for row, name in ROWS.items():
-        cfg = compose(config_name="eval", overrides=["experiment=table1", f"row={row}"])
-        cell = cells[SCENARIOS[name].title]
-        assert to_typed(cfg).sim_spec() == cell.scenario.spec()
-        assert list(cfg.seeds) == list(cell.seeds)
-        learned = [ref.name for label, ref in cell.policies.items() if ref.kind == "pretrained"]
-        assert sorted(cfg.pretrained) == sorted(learned)
 
 
 RULES = "policy=[mpdm,rbts,lookahead,hungarian,hindsight]"

@@ -18,6 +18,7 @@ from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.journal import EpisodeJournal, journal_path
 from rtaw_marl.policies import MPDM
 from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.utils import runs
 from rtaw_marl.utils.runs import LOCK_NAME, check_writable_file, claim_file, claim_folder
 
 QUICK = ("env.num_tasks=30", "progress=false", "policy=[mpdm,rbts]")
@@ -69,9 +70,43 @@ def test_a_held_folder_is_refused(tmp_path: Path, holder) -> None:
 
 def test_a_folder_is_free_again_after_its_run(tmp_path: Path) -> None:
     with claim_folder(tmp_path / "run"):
-        pass
+        assert (tmp_path / "run" / LOCK_NAME).is_file()
+    assert not (tmp_path / "run" / LOCK_NAME).exists()  # no lock file left behind
     with claim_folder(tmp_path / "run") as folder:
         assert folder == tmp_path / "run"
+
+
+def test_no_lock_file_is_left_after_a_run_or_its_error(tmp_path: Path) -> None:
+    out = tmp_path / "res.json"
+    with claim_file(out):
+        out.write_text("{}")
+    with pytest.raises(RuntimeError, match="boom"), claim_file(out):
+        raise RuntimeError("boom")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["res.json"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="flock is POSIX")
+def test_a_lock_file_deleted_by_its_holder_is_not_taken(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A lock file opened just before its holder deleted it is stale: the claim locks the
+    file on disk instead, so a third run cannot take a second lock beside it."""
+    lock_path = tmp_path / ".res.json.lock"
+    real_open = runs._open_lock
+    opened: list[int] = []
+
+    def open_then_lose(path: Path, name: str, kept: str):
+        handle = real_open(path, name, kept)
+        if not opened:
+            path.unlink()  # the holder ended between our open and our flock
+        opened.append(os.fstat(handle.fileno()).st_ino)
+        return handle
+
+    monkeypatch.setattr(runs, "_open_lock", open_then_lose)
+    with claim_file(tmp_path / "res.json"):
+        assert len(opened) == 2
+        assert os.stat(lock_path).st_ino == opened[1]
+    assert not lock_path.exists()
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="flock is POSIX")

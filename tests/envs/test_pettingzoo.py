@@ -7,8 +7,6 @@ Euclidean one, and noise-free dynamics can be replayed from the observations alo
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -853,24 +851,3 @@ def test_usc_map_episode_with_mpdm() -> None:
     total, info = episode_return(env, choose=act, seed=0)
     assert info["tasks_served"] == 60
     assert info["ttd"] == pytest.approx(-total, rel=1e-9)
-
-
-# --------------------------------------------------------------------------- benchmark smoke
-def test_bench_env_quick_smoke(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """``experiments/bench_env.py --quick`` runs and writes its markdown table."""
-    script = REPO_ROOT / "experiments" / "bench_env.py"
-    spec = importlib.util.spec_from_file_location("bench_env", script)
-    assert spec is not None
-    assert spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    monkeypatch.setitem(sys.modules, "bench_env", bench)  # dataclasses look it up
-    spec.loader.exec_module(bench)
-    out = tmp_path / "bench.md"
-    report = bench.main(["--quick", "--output", str(out)])
-    assert out.read_text() == report + "\n"
-    assert "| benchmark | setting |" in report
-    for name in ("sim+MPDM", "AEC first-valid", "AEC+MPDM(obs)", "episode MPDM", "episode RBTS"):
-        assert f"| {name} |" in report
-    assert report in capsys.readouterr().out

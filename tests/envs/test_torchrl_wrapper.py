@@ -10,8 +10,6 @@ script runs.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 import warnings
 from pathlib import Path
 from typing import Any
@@ -156,31 +154,3 @@ def test_interop_keys_name_entries_of_the_wrapped_env(model: str) -> None:
         for key in INTEROP_KEYS.observation(net.in_keys):
             assert key in td.keys(True, True), key
     assert INTEROP_KEYS.loss_mask in td.keys(True, True)
-
-
-def test_bench_wrapper_runs(monkeypatch: pytest.MonkeyPatch) -> None:
-    """``experiments/bench_wrapper.py``: its rows for M = 10, a few steps each."""
-    script = REPO_ROOT / "experiments" / "bench_wrapper.py"
-    spec = importlib.util.spec_from_file_location("bench_wrapper", script)
-    assert spec is not None
-    assert spec.loader is not None
-    bench = importlib.util.module_from_spec(spec)
-    monkeypatch.setitem(sys.modules, "bench_wrapper", bench)  # dataclasses look it up
-    spec.loader.exec_module(bench)
-    monkeypatch.setitem(bench.STEPS, 10, 20)
-    rows = bench.run_all((10,), repeats=1, quick=True)
-    warehouse = [
-        ("warehouse", wrapper, observation, obs_format)
-        for observation in ("compact", "full")
-        for obs_format in ("dict", "flat")
-        for wrapper in ("stock", "vectorised")
-    ]
-    assert [(r.env, r.wrapper, r.observation, r.obs_format) for r in rows] == [
-        *warehouse,
-        ("no-op", "stock", "compact", "flat"),
-        ("no-op, no infos", "stock", "compact", "flat"),
-    ]
-    assert all(row.median > 0 for row in rows)
-    report = bench.render(rows, quick=True)
-    assert "| warehouse | vectorised | compact | flat | 10 |" in report
-    assert "x |" in report  # the speed-up column, vectorised over stock

@@ -84,7 +84,7 @@ def test_transcript_prints_and_saves_the_same_text(tmp_path: Path) -> None:
 
 def test_rtaw_study_saves_its_tables_beside_its_json(cli, tmp_path: Path, monkeypatch) -> None:
     """rtaw-study's printed tables land in ``<study>.txt`` in its run folder."""
-    from rtaw_marl.evaluation.study import Cell, Study, rule
+    from benchmarks.study import Cell, Study, rule
     from rtaw_marl.scenarios import SCENARIOS
 
     small = Study(
@@ -100,7 +100,7 @@ def test_rtaw_study_saves_its_tables_beside_its_json(cli, tmp_path: Path, monkey
         ],
         render=lambda result, _: json.dumps(result.ttd),
     )
-    monkeypatch.setattr("rtaw_marl.cli.study.find_study", lambda name: small)
+    monkeypatch.setattr("benchmarks.run.find_study", lambda name: small)
     result = cli("study", "seeds=[0,1]", f"output={tmp_path / 'st'}")
     assert result.code == 0, result.err
     saved = (tmp_path / "st" / "small.txt").read_text()

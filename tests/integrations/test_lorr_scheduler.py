@@ -228,7 +228,7 @@ def test_random_map_hundred_robots() -> None:
 
 def test_judge_table_ranks_and_gains() -> None:
     """The judge's table: gains in both simulators, ranks, and Kendall's tau."""
-    from rtaw_marl.integrations.lorr.table import judge_markdown, rank_agreement
+    from benchmarks.lorr_judge import judge_markdown, rank_agreement
 
     def run(n: int, sched: bool = True) -> dict:
         stats = {"calls": 10, "seconds": 0.5, "deferred": 3} if sched else {}

@@ -125,7 +125,7 @@ def test_station_tasks_need_stations() -> None:
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))
 def test_ascii_exports_in_docs_match_the_generator(preset: str) -> None:
-    """docs/layouts/<P>.txt (written by experiments/export_layouts.py) is layout <P>."""
+    """docs/layouts/<P>.txt (written by benchmarks/scripts/export_layouts.py) is layout <P>."""
     from pathlib import Path
 
     from rtaw_marl.sim.layout import load_layout

@@ -20,7 +20,8 @@ class LoRRConfig:
     """An ``rtaw-lorr`` run: schedulers inside LoRR's own simulator.
 
     Attributes:
-        problem: The LoRR 2024 problem JSON (required unless ``build_only``).
+        problem: The LoRR 2024 problem JSON (required unless ``build_only``), or
+            ``builtin:random_32_32_20_100.json``, the one shipped with the package.
         policy: Schedulers, one ``lifelong`` run each: ``lorr_default`` (the kit's own),
             any rule of ``rtaw-eval`` but ``hindsight`` (``mpdm``, ``lookahead``,
             ``batch``, ...), ``checkpoint`` and ``pretrained``.

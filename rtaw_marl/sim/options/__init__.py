@@ -19,6 +19,7 @@ from typing import Any
 
 from rtaw_marl.errors import unknown_name
 from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.maps import BUILTIN
 from rtaw_marl.sim.options.base import Option, option_from
 from rtaw_marl.sim.options.layouts import (
     LAYOUTS,
@@ -93,8 +94,8 @@ __all__ = [
 
 
 def layout_option(spec: str | Mapping[str, Any] | LayoutOption | Layout) -> LayoutOption:
-    """A layout option from a name (``shelves``), a file path, a mapping, a
-    :class:`Layout` or itself.
+    """A layout option from a name (``shelves``), a file path or ``builtin:NAME`` (a
+    shipped map, :mod:`rtaw_marl.sim.maps`), a mapping, a :class:`Layout` or itself.
 
     The paper's warehouses are named as on the command line (``layout=C``): ``"C"`` and
     ``{"name": "C", "width": 256, "height": 256}`` are the ``preset`` option with
@@ -102,7 +103,7 @@ def layout_option(spec: str | Mapping[str, Any] | LayoutOption | Layout) -> Layo
     """
     if isinstance(spec, Layout):
         return GivenLayout(layout=spec)
-    if isinstance(spec, str) and spec not in LAYOUTS and "." in spec:
+    if isinstance(spec, str) and spec not in LAYOUTS and ("." in spec or spec.startswith(BUILTIN)):
         return FileLayoutConfig(path=spec)
     name = spec if isinstance(spec, str) else None
     if isinstance(spec, Mapping):

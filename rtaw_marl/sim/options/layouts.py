@@ -33,7 +33,9 @@ class LayoutOption(Option, ABC):
 
     Attributes:
         path: A layout file (SBPL ``.cfg``, MovingAI ``.map`` or ASCII) loaded instead of
-            the generated layout when set, with any ``layout=``.
+            the generated layout when set, with any ``layout=``; ``builtin:NAME`` loads a
+            map shipped with the package (``builtin:usc_64.cfg``; names:
+            ``rtaw_marl.sim.maps.MAPS``).
     """
 
     group: ClassVar[str] = "layout"
@@ -191,7 +193,8 @@ class FileLayoutConfig(LayoutOption):
     """A layout file: SBPL ``.cfg``, MovingAI ``.map`` or ASCII (``.`` free, ``@`` blocked).
 
     Attributes:
-        path: The file (required).
+        path: The file (required), or ``builtin:NAME`` for a shipped map
+            (``builtin:warehouse-10-20-10-2-1.map``).
     """
 
     name: str = "file"
@@ -206,7 +209,8 @@ class LoRRLayoutConfig(LayoutOption):
     """The map of a League of Robot Runners 2024 problem (:mod:`rtaw_marl.sim.lorr`).
 
     Attributes:
-        problem: The problem JSON (required; ``scenario=lorr`` takes ``tasks.problem``).
+        problem: The problem JSON (required; ``scenario=lorr`` takes ``tasks.problem``),
+            or ``builtin:random_32_32_20_100.json``, the shipped one.
     """
 
     name: str = "lorr"

@@ -10,7 +10,6 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.lorr import LoRRTasks, read_problem
 from rtaw_marl.sim.options.base import Option
 from rtaw_marl.sim.tasks import (
-    DEFAULT_CENTRES,
     POC_TASKS,
     TWO_TASKS,
     ClusteredTasks,
@@ -64,17 +63,25 @@ class DesignatedTasksConfig(TaskOption):
     """Gaussian pickup and delivery regions around fixed centres.
 
     Attributes:
-        pickup_centres: ``[x, y]`` centres of the pickup regions (default: the original
-            RTAW code's five centres).
-        delivery_centres: ``[x, y]`` centres of the delivery regions.
-        sigma: Standard deviation of every region, in cells.
+        pickup_centres: ``[x, y]`` centres of the pickup regions, cells of the layout used
+            as given (a centre off the layout is an error). ``null``: the original RTAW
+            code's five centres (11,10), (29,29), (48,16), (48,29), (4,54), written for
+            its 60x60 area. They stay as written along a side of 60 to 64 cells (the
+            60x60 layouts and the 64x64 maps they were made for); along any other side
+            they are scaled in proportion, ``x' = (x + 0.5) * W / 60 - 0.5`` (likewise
+            ``y`` with ``H``), and a scaled centre off the main region moves to its
+            nearest main-region cell, so tasks spread over the whole map (on the 161x63
+            ``warehouse-10-20-10-2-1.map`` the centres' x runs from 12 to 130, not 4 to 48).
+        delivery_centres: ``[x, y]`` centres of the delivery regions; ``null``: the
+            default centres, placed like the pickups'.
+        sigma: Standard deviation of every region, in cells (not scaled).
     """
 
     name: str = "designated"
     # list[Any], checked below as [[x, y], ...] of numbers: OmegaConf 2.3 refuses an
     # integer in a nested list[list[float]] (`tasks.pickup_centres=[[10,20]]`).
-    pickup_centres: list[Any] = field(default_factory=lambda: _centres())
-    delivery_centres: list[Any] = field(default_factory=lambda: _centres())
+    pickup_centres: list[Any] | None = None
+    delivery_centres: list[Any] | None = None
     sigma: float = 5.0
 
     def __post_init__(self) -> None:
@@ -82,6 +89,8 @@ class DesignatedTasksConfig(TaskOption):
         check_number("tasks.sigma", self.sigma, above=0)
         for key in ("pickup_centres", "delivery_centres"):
             centres = getattr(self, key)
+            if centres is None:
+                continue
             check_value(f"tasks.{key}", centres, list[list[float]])
             if not centres or any(len(c) != 2 for c in centres):
                 raise ConfigError(
@@ -130,7 +139,8 @@ class FileTasksConfig(TaskOption):
     """A fixed task list: CSV with header ``ox,oy,dx,dy``, one task per row in arrival order.
 
     Attributes:
-        path: The CSV file (required).
+        path: The CSV file (required; ``builtin:NAME`` is resolved like every input
+            path, though no task CSV is shipped).
     """
 
     name: str = "file"
@@ -146,7 +156,8 @@ class LoRRTasksConfig(TaskOption):
     cells (:mod:`rtaw_marl.sim.lorr`); ``scenario=lorr`` sets the rest.
 
     Attributes:
-        problem: The problem JSON (required).
+        problem: The problem JSON (required), or ``builtin:random_32_32_20_100.json``,
+            the shipped one.
         starts: ``file`` (the first ``env.num_robots`` cells of its agent file) or
             ``random`` (distinct random free cells per seed, for more robots).
     """
@@ -209,7 +220,3 @@ TASK_STREAMS: dict[str, type[TaskOption]] = {
         TwoTaskConfig,
     )
 }
-
-
-def _centres() -> list[list[float]]:
-    return [[float(x), float(y)] for x, y in DEFAULT_CENTRES]
