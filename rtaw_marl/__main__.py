@@ -15,7 +15,8 @@ from rtaw_marl.utils.commands import NEEDS, SUMMARIES
 
 __all__ = ["main", "overview"]
 
-_OPTIONS = ("--version", "--help", "-h")
+#: What the error suggests for a misspelt option (``-h`` is ``--help`` too).
+_OPTIONS = ("--version", "--help")
 
 
 def _description() -> str:
@@ -67,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
         print(rtaw_marl.__version__)
         return 0
     given = " ".join(args)
-    hint = did_you_mean(args[0], _OPTIONS[:2]) if len(args) == 1 else ""
+    hint = did_you_mean(args[0], _OPTIONS) if len(args) == 1 else ""
     print(
         f"error: unknown argument {given!r}: python -m rtaw_marl takes no argument, "
         f"--version or --help{hint}",

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.unit
+
 PACKAGE = Path(__file__).resolve().parents[1] / "rtaw_marl"
 
 #: Layer of each part of the package; a module may import only its own layer or lower ones.

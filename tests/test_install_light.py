@@ -14,6 +14,8 @@ import pytest
 
 import rtaw_marl.cli
 
+pytestmark = pytest.mark.system
+
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Modules of the extras that the env path must not import.

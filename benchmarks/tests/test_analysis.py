@@ -20,6 +20,8 @@ from rtaw_marl.policies.lookahead import rollout_distances
 from rtaw_marl.scenarios import EVAL_SEEDS, SCENARIOS
 from rtaw_marl.sim.builder import build_sim
 
+pytestmark = pytest.mark.unit
+
 ROOT = Path(__file__).resolve().parents[2]
 TINY = SCENARIOS["C_astar_m10"].with_env(
     num_robots=3, num_tasks=15, queue_len=5, episode_mode="drain"

@@ -26,6 +26,8 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import RESERVED_SEEDS, training_seed
 
+pytestmark = pytest.mark.integration
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SMALL: dict[str, Any] = {
     "num_robots": 4,

@@ -8,6 +8,8 @@ import pytest
 
 from benchmarks.scripts import bench_env, bench_wrapper
 
+pytestmark = pytest.mark.integration
+
 
 def test_bench_env_quick_smoke(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``python -m benchmarks.scripts.bench_env --quick`` writes its markdown table."""

@@ -27,6 +27,8 @@ from rtaw_marl.policies import make_baseline
 from rtaw_marl.scenarios import SCENARIOS
 from rtaw_marl.sim.builder import build_sim
 
+pytestmark = pytest.mark.integration
+
 SMALL = SCENARIOS["C_astar_m10"].with_env(num_tasks=30)
 
 

@@ -14,6 +14,8 @@ from benchmarks.study import StudyResult, load_result, run_study
 from benchmarks.tables import ORDER, section
 from rtaw_marl.scenarios import SCENARIOS
 
+pytestmark = pytest.mark.unit
+
 #: Mean TTD per policy of the fake evaluations (lower is better).
 MEANS = {"MPDM": 1000, "RBTS": 990, "lookahead": 920, "hungarian": 1010, "hindsight": 850,
          "RTAW": 970, "RTAW+": 880}  # fmt: skip

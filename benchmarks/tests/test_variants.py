@@ -14,6 +14,8 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.pretrained.registry import pretrained_path
 from rtaw_marl.training.zoo import ZOO
 
+pytestmark = pytest.mark.integration
+
 
 def typed(cmd: list[str]):
     assert cmd[0].endswith("rtaw-train")

@@ -24,12 +24,25 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 import numpy as np
-import torch
-from tensordict import TensorDict, TensorDictBase
-from torchrl.envs import EnvBase
+
+from rtaw_marl.errors import (
+    ConfigError,
+    EnvUsageError,
+    InvalidActionError,
+    missing_extra,
+    usage_error,
+)
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDict, TensorDictBase
+    from torchrl.envs import EnvBase
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.torchrl import DONE_KEYS, BatchedWarehouseEnv, set_batch_specs
-from rtaw_marl.errors import ConfigError, EnvUsageError, InvalidActionError, usage_error
 from rtaw_marl.sim.builder import SimSpec
 
 __all__ = ["MIXED_KEYS", "MixedBatchedEnv"]

@@ -57,12 +57,19 @@ from dataclasses import MISSING, dataclass
 from pathlib import Path
 from typing import Any
 
-import torch
-import torchrl.collectors
-from omegaconf import OmegaConf
-from tensordict import TensorDictBase
-from torchrl.data import Composite
-from torchrl.envs import EnvBase, Transform
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    import torchrl.collectors
+    from omegaconf import OmegaConf
+    from tensordict import TensorDictBase
+    from torchrl.data import Composite
+    from torchrl.envs import EnvBase, Transform
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.pettingzoo import env as warehouse_env
 from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper

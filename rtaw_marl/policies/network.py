@@ -22,11 +22,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
+
+from rtaw_marl.errors import ConfigError, missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.features import candidate_slots, sim_observation
 from rtaw_marl.envs.observations import read_features
-from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import Actor, load_checkpoint, load_networks
 from rtaw_marl.models.rtaw_plus import RTAWPlusActor
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path

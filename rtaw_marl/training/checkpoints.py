@@ -27,9 +27,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import torch
+from rtaw_marl.errors import ConfigError, missing_extra
 
-from rtaw_marl.errors import ConfigError
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
+
 from rtaw_marl.models.checkpoint import Actor, Critic, load_checkpoint, plain_model, save_checkpoint
 from rtaw_marl.training.config import TrainConfig
 from rtaw_marl.utils.atomic import atomic_write

@@ -30,15 +30,22 @@ from functools import partial
 from typing import Any
 
 import numpy as np
-import torch
-from tensordict import TensorDictBase
-from tensordict.nn import TensorDictModule
-from torchrl.collectors import BaseCollector, Collector, MultiSyncCollector
+
+from rtaw_marl.errors import ConfigError, missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDictBase
+    from tensordict.nn import TensorDictModule
+    from torchrl.collectors import BaseCollector, Collector, MultiSyncCollector
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.features import FEATURES
 from rtaw_marl.envs.mixed import MixedBatchedEnv
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
-from rtaw_marl.errors import ConfigError
 from rtaw_marl.scenarios.mix import mix_specs
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.checkpoints import Progress

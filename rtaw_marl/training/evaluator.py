@@ -6,7 +6,15 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 import numpy as np
-import torch
+
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.features import FEATURES
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv

@@ -24,9 +24,16 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-import torch
-from tensordict import TensorDictBase
-from tensordict.utils import NestedKey
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+    from tensordict import TensorDictBase
+    from tensordict.utils import NestedKey
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.envs.pettingzoo import env as warehouse_env
 from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper

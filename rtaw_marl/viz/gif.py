@@ -31,10 +31,17 @@ from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
-from matplotlib import colormaps
-from PIL import Image, ImageDraw, ImageFont, features
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, missing_extra
+
+# Without the command-line extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    from matplotlib import colormaps
+    from PIL import Image, ImageDraw, ImageFont, features
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "cli") from None
+
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write

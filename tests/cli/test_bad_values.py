@@ -28,6 +28,8 @@ from rtaw_marl.sim.tasks import FixedTasks, load_task_csv
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
 from tests.conftest import CliResult
 
+pytestmark = pytest.mark.integration
+
 #: A 7x7 ASCII map whose cell (5, 5) is walled in by shelves.
 WALLED = "\n".join([".......", ".......", ".......", ".......", "....@@@", "....@.@", "....@@@"])
 

@@ -11,6 +11,8 @@ import pytest
 
 from rtaw_marl.config import compose, to_typed
 
+pytestmark = pytest.mark.system
+
 ROOT = Path(__file__).resolve().parents[2]
 
 #: Launcher -> (its Hydra class, settings a cluster run passes).

@@ -27,6 +27,8 @@ from rtaw_marl.utils.runs import (
     claim_folder,
 )
 
+pytestmark = pytest.mark.integration
+
 QUICK = ("env.num_tasks=30", "progress=false", "policy=[mpdm]", "seeds=[0]")
 TRAIN = ("scenario=poc", "progress=false")
 NOSPACE = "No space left on device"

@@ -20,6 +20,8 @@ from rtaw_marl.cli.eval import run
 from rtaw_marl.config import CONF_DIR, compose
 from rtaw_marl.sim.builder import build_sim
 
+pytestmark = pytest.mark.integration
+
 GROUPS = ("env", "layout", "navigator", "tasks", "scenario", "row", "experiment")
 GLOBAL_GROUPS = ("scenario", "row", "experiment")  # packaged at the top level
 RTAW_EVAL = Path(sys.executable).with_name("rtaw-eval")

@@ -30,6 +30,8 @@ from rtaw_marl.evaluation.journal import file_digest, journal_path
 from rtaw_marl.policies.pretrained.registry import SHIPPED
 from rtaw_marl.utils.signals import Interrupted
 
+pytestmark = pytest.mark.integration
+
 QUICK = ("env.num_tasks=30", "progress=false")
 RTAW_EVAL = Path(sys.executable).with_name("rtaw-eval")
 #: The module (the package's ``evaluate`` attribute is the function).

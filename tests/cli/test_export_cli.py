@@ -13,6 +13,8 @@ from rtaw_marl.cli.export import main, parse
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.export import ExportConfig
 
+pytestmark = pytest.mark.integration
+
 RTAW_EXPORT = Path(sys.executable).with_name("rtaw-export")
 
 

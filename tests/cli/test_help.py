@@ -20,6 +20,8 @@ from rtaw_marl.config.store import APPS, GROUPS
 from rtaw_marl.evaluation.config import EvalConfig
 from rtaw_marl.sim.config import SimConfig
 
+pytestmark = pytest.mark.integration
+
 RTAW_EVAL = Path(sys.executable).with_name("rtaw-eval")
 
 

@@ -10,6 +10,8 @@ from rtaw_marl.policies import make_baseline
 from rtaw_marl.scenarios.registry import scenario
 from rtaw_marl.sim.options import navigator_option
 
+pytestmark = pytest.mark.integration
+
 
 @pytest.mark.parametrize(
     ("args", "listing", "suggestion"),

@@ -12,6 +12,8 @@ from PIL import Image
 from rtaw_marl.cli.render import run
 from rtaw_marl.config import compose
 
+pytestmark = pytest.mark.integration
+
 RTAW_RENDER = Path(sys.executable).with_name("rtaw-render")
 
 

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.integration
+
 TINY = ["env.num_tasks=20", "policy=[mpdm,rbts]", "seeds=[0,1]", "progress=false"]
 
 

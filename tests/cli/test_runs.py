@@ -21,6 +21,8 @@ from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.utils import runs
 from rtaw_marl.utils.runs import LOCK_NAME, check_writable_file, claim_file, claim_folder
 
+pytestmark = pytest.mark.integration
+
 QUICK = ("env.num_tasks=30", "progress=false", "policy=[mpdm,rbts]")
 
 

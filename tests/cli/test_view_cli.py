@@ -18,6 +18,8 @@ from rtaw_marl.config import compose
 from rtaw_marl.viz.episode_data import MOVES
 from tests.cli.test_eval_cli import _tiny_lorr_problem
 
+pytestmark = pytest.mark.integration
+
 
 def _episodes(path: Path) -> list[dict]:
     text = path.read_text(encoding="utf-8")

@@ -15,6 +15,8 @@ from rtaw_marl.config.store import APPS
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim import builder
 
+pytestmark = pytest.mark.integration
+
 GROUP_DIRS = ("env", "layout", "navigator", "tasks", "model", "algo", "collector")
 
 

@@ -27,6 +27,8 @@ from rtaw_marl.envs.pettingzoo import zero_info
 from rtaw_marl.sim.metrics import EpisodeMetrics
 from tests.envs.test_pettingzoo import first_valid, is_done, play, unexpected_warnings
 
+pytestmark = pytest.mark.unit
+
 # pettingzoo.test re-exports functions under their modules' names: take the modules.
 pz_state = importlib.import_module("pettingzoo.test.state_test")
 pz_benchmark = importlib.import_module("pettingzoo.test.performance_benchmark")

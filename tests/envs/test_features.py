@@ -11,6 +11,8 @@ from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.features import MISSING, NUM_RIVALS, SOFTMIN_TEMPERATURE
 from tests.envs.test_pettingzoo import first_valid, is_done, oracle_distance
 
+pytestmark = pytest.mark.unit
+
 
 def _oracle(sim, robot: int, navigator: str) -> tuple[np.ndarray, np.ndarray]:
     """Relations and rivals of ``robot``'s view, one task and one robot at a time."""

@@ -20,6 +20,8 @@ from rtaw_marl import GYMNASIUM_ENV_ID, warehouse_v1
 from rtaw_marl.envs.gymnasium import WarehouseEnv
 from rtaw_marl.errors import ConfigError, InvalidActionError, ResetNeededError
 
+pytestmark = pytest.mark.unit
+
 SMALL: dict[str, Any] = {
     "num_robots": 3,
     "queue_len": 4,

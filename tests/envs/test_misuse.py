@@ -26,6 +26,8 @@ from rtaw_marl.errors import (
 )
 from rtaw_marl.sim.builder import SimSpec
 
+pytestmark = pytest.mark.unit
+
 SMALL: dict[str, Any] = {
     "num_robots": 2,
     "queue_len": 3,

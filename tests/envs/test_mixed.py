@@ -14,6 +14,8 @@ from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.scenarios.mix import member_spec
 from rtaw_marl.sim.inputs import RESERVED_SEEDS
 
+pytestmark = pytest.mark.unit
+
 #: Two fleets, two queue lengths, two navigators, both episode modes, short episodes.
 SMALL = member_spec("open60_direct_m10:t20")
 OTHER = member_spec("A_astar_m10:m3:n4:t12:paper")

@@ -23,6 +23,8 @@ from rtaw_marl.errors import ConfigError, InvalidActionError, LayoutError
 from rtaw_marl.policies import MPDM, RBTS
 from rtaw_marl.sim.mapf.conflicts import check_schedule
 
+pytestmark = pytest.mark.unit
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 MAPS_DIR = REPO_ROOT.parent / "shared" / "maps"
 USC_64 = MAPS_DIR / "rtaw" / "usc_64.cfg"

@@ -14,6 +14,8 @@ from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.builder import SimSpec
 
+pytestmark = pytest.mark.unit
+
 SMALL = {"num_robots": 4, "num_tasks": 12, "queue_len": 3}
 
 

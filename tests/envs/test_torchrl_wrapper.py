@@ -26,6 +26,8 @@ from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.interop import INTEROP_KEYS, make_interop_env
 
+pytestmark = pytest.mark.unit
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 OPEN = {"name": "open", "width": 40, "height": 40}
 

@@ -11,6 +11,8 @@ from rtaw_marl.evaluation.evaluate import TimeEstimate, duration, warm_up
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
+pytestmark = pytest.mark.unit
+
 ENV = {"num_robots": 10, "num_tasks": 30, "noise_mean": 0.0, "noise_var": 0.0}
 
 

@@ -24,6 +24,8 @@ from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.tasks import FixedTasks
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize(
     ("layout", "navigator", "tasks"),

@@ -24,6 +24,8 @@ from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.tasks import FixedTasks, TaskStream
 
+pytestmark = pytest.mark.integration
+
 #: Completion noise ``(mean, var)`` per setting: none; the default; wide (draws below
 #: minus the travel time: tasks may finish at their decision time, so robots need not
 #: act in id order; a negative mean is refused).

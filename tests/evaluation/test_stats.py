@@ -19,6 +19,8 @@ from rtaw_marl.evaluation import (
     paired_difference,
 )
 
+pytestmark = pytest.mark.unit
+
 BASE = [10.0, 12.0, 11.0, 13.0, 9.0]
 OTHER = [9.0, 11.5, 9.0, 12.0, 8.5]  # differences 1, 0.5, 2, 1, 0.5
 

@@ -6,9 +6,13 @@ import io
 import json
 from pathlib import Path
 
+import pytest
+
 from rtaw_marl.cli.eval import run
 from rtaw_marl.config import compose
 from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcript_path
+
+pytestmark = pytest.mark.integration
 
 TINY = ["env.num_tasks=20", "env.num_robots=3", "policy=[mpdm,rbts]", "seeds=[0,1]"]
 

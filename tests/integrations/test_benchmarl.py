@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.integration
+
 # find_spec, not importorskip: importorskip would import benchmarl here.
 if importlib.util.find_spec("benchmarl") is None:
     pytest.skip("benchmarl is not installed", allow_module_level=True)

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.integration
+
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "integrations.md"
 SNIPPETS = re.findall(r"```python\n(.*?)```", PAGE.read_text(), re.S)
 COMMON = {"gymnasium", "numpy", "rtaw_marl"}

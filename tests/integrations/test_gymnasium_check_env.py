@@ -12,6 +12,8 @@ from gymnasium.utils.env_checker import check_env
 from rtaw_marl import GYMNASIUM_ENV_ID
 from rtaw_marl.envs.gymnasium import WarehouseEnv
 
+pytestmark = pytest.mark.integration
+
 SMALL: dict[str, Any] = {
     "num_robots": 3,
     "queue_len": 4,

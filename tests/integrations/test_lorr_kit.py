@@ -23,6 +23,8 @@ from rtaw_marl.integrations.lorr.output import episode_output, read_replay, repl
 from rtaw_marl.integrations.lorr.run import LoRRRun, run_lifelong
 from rtaw_marl.sim.lorr import read_problem
 
+pytestmark = pytest.mark.system
+
 KIT = Path(__file__).resolve().parents[2].parent / "shared" / "lorr" / "start-kit-v2.1.2"
 RANDOM = KIT / "example_problems" / "random.domain" / "random_32_32_20_100.json"
 STEPS, PLAN_MS = 200, 50

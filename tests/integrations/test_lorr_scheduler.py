@@ -19,6 +19,8 @@ from rtaw_marl.integrations.lorr.entry import RunSpec, build_scheduler
 from rtaw_marl.integrations.lorr.scheduler import PolicyScheduler, Timestep
 from rtaw_marl.sim.lorr import read_problem
 
+pytestmark = pytest.mark.integration
+
 KIT = Path(__file__).resolve().parents[2].parent / "shared" / "lorr" / "start-kit-v2.1.2"
 RANDOM = KIT / "example_problems" / "random.domain" / "random_32_32_20_100.json"
 

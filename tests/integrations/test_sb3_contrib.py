@@ -17,6 +17,8 @@ from sb3_contrib.common.maskable.utils import get_action_masks
 from rtaw_marl import GYMNASIUM_ENV_ID
 from rtaw_marl.sim.inputs import training_seed
 
+pytestmark = pytest.mark.integration
+
 SMALL: dict[str, Any] = {
     "num_robots": 3,
     "queue_len": 4,

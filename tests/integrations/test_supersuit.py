@@ -21,6 +21,8 @@ from gymnasium.spaces import Box
 from rtaw_marl import warehouse_v1
 from rtaw_marl.envs.gymnasium import WarehouseEnv
 
+pytestmark = pytest.mark.integration
+
 ss = pytest.importorskip("supersuit")
 
 SMALL: dict[str, Any] = {

@@ -18,6 +18,8 @@ from tianshou.env.pettingzoo_env import PettingZooEnv
 
 from rtaw_marl import warehouse_v1
 
+pytestmark = pytest.mark.integration
+
 SMALL: dict[str, Any] = {
     "num_robots": 3,
     "queue_len": 4,

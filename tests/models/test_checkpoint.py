@@ -23,6 +23,8 @@ from rtaw_marl.models.config import RTAWConfig, RTAWPlusConfig
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 
+pytestmark = pytest.mark.unit
+
 
 class _Payload:
     """Unpickling this object creates a file: what a malicious checkpoint would do."""

@@ -10,6 +10,8 @@ from rtaw_marl.models.actor_critic import make_actor, make_critic
 from rtaw_marl.models.checkpoint import build_networks
 from rtaw_marl.models.config import RTAWConfig
 
+pytestmark = pytest.mark.unit
+
 
 def _state(batch: int, m: int, n: int, seed: int = 0) -> TensorDict:
     g = torch.Generator().manual_seed(seed)

@@ -25,6 +25,8 @@ from rtaw_marl.sim.distances import EuclideanDistance
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.tasks import FixedTasks
 
+pytestmark = pytest.mark.unit
+
 #: The two observation-path settings: (navigator, layout spec).
 SETTINGS: dict[str, tuple[str, dict[str, Any]]] = {
     "direct-open": ("direct", {"name": "open", "width": 20, "height": 20}),

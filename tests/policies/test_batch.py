@@ -16,6 +16,8 @@ from rtaw_marl.sim.distances import GridDistance
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.tasks import FixedTasks
 
+pytestmark = pytest.mark.unit
+
 
 def brute_force(cost: np.ndarray) -> tuple[float, tuple[int, ...]]:
     """The cheapest injective assignment of rows to columns, by enumeration."""

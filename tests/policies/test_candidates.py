@@ -17,6 +17,8 @@ from rtaw_marl.sim.core import WarehouseSim
 pytest.importorskip("torch")
 from rtaw_marl.policies import load_policy
 
+pytestmark = pytest.mark.unit
+
 BIG: dict[str, Any] = {"num_robots": 30, "queue_len": 60, "num_tasks": 80, "layout": "C"}
 
 

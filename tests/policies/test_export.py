@@ -29,6 +29,8 @@ from rtaw_marl.policies.export_check import check_exported, record_decisions
 from rtaw_marl.policies.export_spec import COLUMNS, INPUTS, input_spec
 from rtaw_marl.policies.network import load_policy
 
+pytestmark = pytest.mark.integration
+
 #: The paper's network and RTAW+ (the generalist: logits in the hundreds).
 POLICIES = {"rtaw": "A_astar_m10", "rtaw_plus": "generalist_plus"}
 #: A checked episode unlike the tracing sizes (2 decisions, 3 slots, 4 robots).

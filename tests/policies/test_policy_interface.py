@@ -20,6 +20,8 @@ from rtaw_marl.sim.core import WarehouseSim
 pytest.importorskip("torch")
 from rtaw_marl.policies import load_policy
 
+pytestmark = pytest.mark.integration
+
 NAVIGATORS = ("direct", "astar", "sipp", "cbs")
 RULES = ("mpdm", "rbts", "random", "lookahead", "hungarian")
 NETWORKS = ("shelves_astar_m10", "shelves_astar_m10_plus")

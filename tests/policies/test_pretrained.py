@@ -14,6 +14,8 @@ from rtaw_marl.policies.pretrained import registry
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize("name", sorted(PRETRAINED))
 def test_pretrained_checkpoint_is_shipped_and_describes_itself(name: str) -> None:

@@ -23,6 +23,8 @@ from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from tests.policies.test_baselines import SETTINGS, random_sim, run_sim, two_task_sim
 
+pytestmark = pytest.mark.unit
+
 
 def _lookahead(sim: WarehouseSim, horizon: int) -> Lookahead:
     return Lookahead(sim.navigator, sim.layout.scale, horizon=horizon)
@@ -81,9 +83,9 @@ def test_lookahead_costs_match_the_rule_as_stated(setting: str, horizon: int) ->
     checked = 0
     while not sim.done:
         first = sim.robot_distances()
-        from rtaw_marl.policies.lookahead import _end_distances
+        from rtaw_marl.policies.lookahead import rollout_distances
 
-        ends = _end_distances(sim.navigator, sim.robot_xy, sim.queue_rows, sim.queue_mask)
+        ends = rollout_distances(sim.navigator, sim.robot_xy, sim.queue_rows, sim.queue_mask)
         got = lookahead_costs(
             first, ends, sim.robot, sim.robot_free_at, sim.time, sim.queue_length,
             sim.queue_mask, horizon, sim.config.noise_mean,

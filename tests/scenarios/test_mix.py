@@ -9,6 +9,8 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.scenarios import SCENARIOS
 from rtaw_marl.scenarios.mix import GENERALIST, member_spec, mix_specs
 
+pytestmark = pytest.mark.unit
+
 
 def test_member_keys_change_the_scenario() -> None:
     base = SCENARIOS["C_astar_m10"].spec()

@@ -12,6 +12,8 @@ from rtaw_marl.scenarios import EVAL_SEEDS, ROWS, SCENARIOS, scenario
 from rtaw_marl.scenarios.configs import expected_files
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
+pytestmark = pytest.mark.integration
+
 
 def test_generated_configs_match_the_registry() -> None:
     """conf/scenario and conf/row hold exactly the registry's files, as generated."""

@@ -13,7 +13,8 @@ from rtaw_marl.sim.distances import EuclideanDistance
 from rtaw_marl.sim.layout import open_grid
 from rtaw_marl.sim.tasks import POC_TASKS, FixedTasks
 
-#: Real warehouse maps kept next to the repository (never copied into it).
+#: Real warehouse maps kept next to the repository (the large ones are not copied into it;
+#: rtaw_marl/maps/ ships a few small ones, tests/sim/test_builtin_maps.py).
 MAPS_DIR = Path(__file__).resolve().parents[2].parent / "shared" / "maps"
 
 

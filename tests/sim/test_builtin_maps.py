@@ -211,6 +211,7 @@ def test_env_runs_an_episode_on_a_builtin_layout() -> None:
         env.close()
 
 
+@pytest.mark.integration  # a CLI run (Hydra composition)
 def test_rtaw_eval_runs_on_a_builtin_layout(cli, tmp_path: Path) -> None:
     out = tmp_path / "r.json"
     result = cli("eval", "layout.path=builtin:usc_64.cfg", "policy=mpdm", "seeds=[0,1]",
@@ -222,6 +223,7 @@ def test_rtaw_eval_runs_on_a_builtin_layout(cli, tmp_path: Path) -> None:
     assert len(data["policies"]["mpdm"]["ttd"]) == 2
 
 
+@pytest.mark.integration  # a CLI run (Hydra composition)
 def test_rtaw_eval_names_the_valid_maps_for_a_wrong_one(cli) -> None:
     result = cli("eval", "layout.path=builtin:usc.cfg", "policy=mpdm", "progress=false")
     assert result.code == 2
@@ -273,6 +275,7 @@ def test_lorr_scenario_plays_from_builtin() -> None:
     assert sim.metrics().tasks_finished > 0
 
 
+@pytest.mark.integration  # a CLI run (Hydra composition)
 def test_rtaw_eval_runs_a_builtin_lorr_problem(cli, tmp_path: Path) -> None:
     """``scenario=lorr tasks.problem=builtin:...``: the Hydra resolvers that derive the
     robots and the window read the shipped problem too."""
@@ -285,6 +288,7 @@ def test_rtaw_eval_runs_a_builtin_lorr_problem(cli, tmp_path: Path) -> None:
     assert json.loads(out.read_text())["config"]["env"]["queue_len"] == 15
 
 
+@pytest.mark.integration  # a CLI run (Hydra composition)
 def test_rtaw_lorr_resolves_a_builtin_problem(cli, tmp_path: Path, monkeypatch) -> None:
     """``rtaw-lorr problem=builtin:...`` hands LoRR's simulator and every scheduler the
     shipped JSON (the kit itself is faked: building it takes minutes)."""

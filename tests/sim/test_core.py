@@ -19,6 +19,8 @@ from rtaw_marl.sim.distances import EuclideanDistance, GridDistance
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.tasks import TWO_TASKS, FixedTasks, RandomTasks
 
+pytestmark = pytest.mark.unit
+
 SQRT18 = math.sqrt(18.0)
 
 

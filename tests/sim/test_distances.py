@@ -20,6 +20,8 @@ from rtaw_marl.sim.distances import (
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.options import ShelvesLayoutConfig, navigator_option
 
+pytestmark = pytest.mark.unit
+
 FAST = settings(max_examples=30, deadline=None, database=None)
 
 #: Two regions split by a full wall at x = 2.

@@ -21,6 +21,8 @@ from rtaw_marl.sim.execution import InstantTravel
 from rtaw_marl.sim.options import ShelvesLayoutConfig
 from rtaw_marl.sim.tasks import RandomTasks
 
+pytestmark = pytest.mark.unit
+
 NOISELESS = {"noise_mean": 0.0, "noise_var": 0.0}
 C = {"name": "preset", "preset": "C"}
 

@@ -14,6 +14,8 @@ from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim.layout import Layout, load_layout, open_grid, shelf_grid
 from rtaw_marl.sim.options import ShelvesLayoutConfig
 
+pytestmark = pytest.mark.unit
+
 FAST = settings(max_examples=30, deadline=None, database=None)
 
 #: Free-cell counts of the RTAW .cfg layouts, from ../shared/maps/README.md.

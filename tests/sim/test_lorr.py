@@ -16,6 +16,8 @@ from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.lorr import LORR_HORIZON, read_agents, read_lorr_tasks, read_problem
 from rtaw_marl.sim.mapf import check_schedule
 
+pytestmark = pytest.mark.integration
+
 KIT = Path(__file__).resolve().parents[2].parent / "shared" / "lorr" / "start-kit-v2.1.2"
 RANDOM = KIT / "example_problems" / "random.domain" / "random_32_32_20_100.json"
 

@@ -26,6 +26,8 @@ from rtaw_marl.sim.tasks import (
     load_task_csv,
 )
 
+pytestmark = pytest.mark.unit
+
 #: Two regions: a 2-cell column on the left, a 3x3 block on the right.
 TWO_REGIONS = np.array([[c == "@" for c in row] for row in ("..@...", "@.@...", "@@@...")])
 

@@ -11,6 +11,8 @@ from rtaw_marl.sim.options import PresetLayoutConfig, WarehouseLayoutConfig, lay
 from rtaw_marl.sim.tasks import ClusteredTasks, StationTasks
 from rtaw_marl.sim.warehouse_layouts import PRESETS
 
+pytestmark = pytest.mark.unit
+
 COMPACTNESS = {"A": 0.13, "B": 0.56, "C": 0.28, "D": 0.49, "E": 0.24}
 
 

@@ -23,6 +23,8 @@ from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.training.logging import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import Estimate, _duration, train
 
+pytestmark = pytest.mark.integration
+
 TINY = [
     "scenario=poc", "eval.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
 ]  # fmt: skip

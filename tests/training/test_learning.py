@@ -20,7 +20,7 @@ from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 
 def _poc_optimum() -> float:

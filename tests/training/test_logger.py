@@ -16,6 +16,8 @@ from rtaw_marl.training.logging import METRICS_CSV, CSVMetrics, RunLogger, read_
 from rtaw_marl.training.logging_config import LOGGERS, MLflowLoggerConfig, WandbLoggerConfig
 from rtaw_marl.training.ppo import train
 
+pytestmark = pytest.mark.unit
+
 #: The paper's proof of concept, two PPO batches of 256 decisions after a four-round
 #: imitation warm start, evaluated at 0, 256 and 512 frames.
 TINY = [

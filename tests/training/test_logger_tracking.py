@@ -15,6 +15,8 @@ from wandb.proto import wandb_internal_pb2
 from rtaw_marl.training.logging_tracking import flat_params
 from rtaw_marl.training.ppo import train
 
+pytestmark = pytest.mark.integration
+
 #: The paper's proof of concept: two PPO batches of 256 decisions, evaluated at 0 and 512.
 TINY = [
     "scenario=poc", "frames=512", "eval.every_frames=512", "algo.frames_per_batch=256",

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
@@ -15,6 +16,8 @@ from rtaw_marl.scenarios import lorr_scenario
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.training.ppo import train
 from tests.cli.test_eval_cli import _tiny_lorr_problem
+
+pytestmark = pytest.mark.integration
 
 
 def test_batched_env_runs_horizon_episodes_in_lockstep(tmp_path: Path) -> None:

@@ -18,6 +18,8 @@ from rtaw_marl.scenarios.mix import member_spec
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.training.ppo import train
 
+pytestmark = pytest.mark.integration
+
 MIX = ["open60_direct_m10:t40", "A_astar_m10:m3:n4:t24:paper"]
 
 

@@ -13,6 +13,8 @@ import pytest
 from rtaw_marl.training.logging import quiet_torchrl_logs
 from rtaw_marl.training.ppo import train
 
+pytestmark = pytest.mark.integration
+
 #: The smallest run that collects, updates (the replay buffer logs at its first fill)
 #: and evaluates: the paper's proof of concept, two batches of 256 decisions.
 TINY = [

@@ -23,6 +23,8 @@ from rtaw_marl.training.logging import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import compose_train
 
+pytestmark = pytest.mark.system
+
 ray = pytest.importorskip("ray")
 
 #: Two actors of 4 simulators each; the paper's 512-frame batches (64 steps per actor).

@@ -19,6 +19,8 @@ from rtaw_marl.training.checkpoints import trim_csv_logs
 from rtaw_marl.training.logging import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import train
 
+pytestmark = pytest.mark.integration
+
 TINY = [
     "scenario=poc", "eval.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
 ]  # fmt: skip

@@ -28,6 +28,8 @@ from rtaw_marl.training.checkpoints import Progress
 from rtaw_marl.training.interop import BATCHED_KEYS, INTEROP_KEYS
 from rtaw_marl.training.ppo import build_learner
 
+pytestmark = pytest.mark.unit
+
 #: A tiny scenario whose episodes end every few frames, so a batch plays many of them.
 TINY = ["scenario=poc", "seed=0", "collector.envs_per_worker=2", "algo.frames_per_batch=64"]
 

@@ -20,6 +20,8 @@ from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.training.ppo import train
 from rtaw_marl.training.selection import run_candidates, second_stage
 
+pytestmark = pytest.mark.integration
+
 TINY = [
     "scenario=poc", "eval.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
 ]  # fmt: skip

@@ -22,6 +22,8 @@ from rtaw_marl.training.evaluator import greedy_ttd
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import POC_ENV, POC_LAYOUT
 
+pytestmark = pytest.mark.integration
+
 TINY = [
     "scenario=poc", "frames=1024", "eval.every_frames=512", "collector.envs_per_worker=4",
     "algo=ppo_paper",

@@ -26,6 +26,8 @@ from rtaw_marl.training.zoo import (
     train_command,
 )
 
+pytestmark = pytest.mark.integration
+
 STAGED = sorted(n for n, r in ZOO.items() if r.stage != "train")
 
 

@@ -16,6 +16,8 @@ from rtaw_marl.policies.pretrained.registry import pretrained_path
 from rtaw_marl.training import retrain
 from rtaw_marl.training.zoo import ZOO, train_command
 
+pytestmark = pytest.mark.integration
+
 
 @pytest.mark.parametrize(
     ("args", "message"),

@@ -13,6 +13,8 @@ from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.viz.gif import BASE_COLORS, HEADER_PX, render_gif, robot_color
 
+pytestmark = pytest.mark.unit
+
 W, H, T = 8, 6, 14
 
 

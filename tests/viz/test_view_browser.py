@@ -20,6 +20,8 @@ from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.viz.view import ViewEpisode, write_view
 from tests.viz.browser import browser_or_skip, chromium, open_view, severe_logs
 
+pytestmark = pytest.mark.system
+
 SEED = 3
 POLICIES = ("mpdm", "lookahead")
 FREE = (242, 242, 242)

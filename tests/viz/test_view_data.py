@@ -25,6 +25,8 @@ from rtaw_marl.viz.episode_data import (
 )
 from rtaw_marl.viz.view import ViewEpisode, page, write_view
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.fixture
 def layout() -> Layout:

@@ -16,6 +16,8 @@ from rtaw_marl.errors import PlanningTimeout
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf import CBSSolution, CBSStats, Grid, Schedule, cbs_solve, check_schedule
 
+pytestmark = pytest.mark.unit
+
 # derandomize: the same 30 examples on every run and machine. Random exploration once
 # drew a feasible 4x4 two-robot instance CBS could not solve within 10 s (28,003
 # high-level nodes), which made `make test` fail by chance.

@@ -13,6 +13,8 @@ from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.mapf.conflicts import check_schedule, find_violations
 from rtaw_marl.sim.mapf.schedule import Schedule
 
+pytestmark = pytest.mark.unit
+
 #: 4 x 3 open grid of the hand-made schedule below.
 GRID = open_grid(4, 3)
 

@@ -23,6 +23,8 @@ from rtaw_marl.sim.mapf import CBSExecutor, Schedule, SIPPExecutor, check_schedu
 from rtaw_marl.sim.options import navigator_option
 from rtaw_marl.sim.tasks import FixedTasks
 
+pytestmark = pytest.mark.unit
+
 PLANNERS = ["sipp", "cbs"]
 
 

@@ -13,6 +13,8 @@ from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf import Grid
 from rtaw_marl.sim.options import ShelvesLayoutConfig
 
+pytestmark = pytest.mark.unit
+
 ROWS = ("..@..", ".@@..", ".....")
 
 

@@ -20,6 +20,8 @@ from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
 from rtaw_marl.sim.options import navigator_option
 from rtaw_marl.sim.tasks import FixedTasks
 
+pytestmark = pytest.mark.unit
+
 
 def grid(*rows: str) -> Layout:
     """A layout from ASCII rows ('.' free, '@' blocked)."""

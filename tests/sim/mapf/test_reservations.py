@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import pytest
+
 from rtaw_marl.sim.mapf.reservations import INF, ReservationTable
+
+pytestmark = pytest.mark.unit
 
 
 def test_reservation_table_intervals_holds_and_release() -> None:

@@ -9,6 +9,8 @@ from rtaw_marl.errors import PlanningTimeout
 from rtaw_marl.sim.layout import Layout, open_grid
 from rtaw_marl.sim.mapf import Grid, ReservationTable, Schedule, check_schedule, sipp_plan
 
+pytestmark = pytest.mark.unit
+
 #: A one-cell pocket above x = 3 of a 7-cell corridor (y = 1).
 POCKET = Layout(np.array([[c == "@" for c in row] for row in ("@@@.@@@", ".......")]))
 
