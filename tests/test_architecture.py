@@ -22,6 +22,9 @@ LAYERS = {
     "rtaw_marl.sim": 1,
     # Named settings over the simulator's options: below every adapter.
     "rtaw_marl.scenarios": 1.5,
+    # The decision model (what a freed robot observes): below the adapters, the models
+    # and the policies, which all read it; NumPy and Numba only.
+    "rtaw_marl.decision": 1.7,
     "rtaw_marl.envs": 2,
     "rtaw_marl.warehouse_v1": 2,
     "rtaw_marl.models": 3,
@@ -157,7 +160,9 @@ BASE_DEPENDENCIES = {
 
 #: The parts of the package that ``pip install rtaw_marl`` must run: the env, the simulator
 #: and the hand-written policies (everything else needs an extra).
-ENV_PATH = ("__init__.py", "errors.py", "warehouse_v*.py", "utils", "sim", "envs", "policies")
+ENV_PATH = (
+    "__init__.py", "errors.py", "warehouse_v*.py", "utils", "sim", "decision", "envs", "policies",
+)  # fmt: skip
 NEEDS_EXTRA = (
     "envs/torchrl.py", "envs/torchrl_wrapper.py", "envs/mixed.py", "policies/network.py",
     "policies/export.py", "policies/export_check.py",
@@ -215,6 +220,7 @@ def test_base_dependencies_are_ranges_of_exactly_the_env_needs() -> None:
         ("rtaw_marl.sim", ("torch", "pettingzoo", "hydra")),
         ("rtaw_marl.sim.builder", ("torch", "pettingzoo", "hydra", "omegaconf")),
         ("rtaw_marl.sim.mapf", ("torch", "pettingzoo", "hydra")),
+        ("rtaw_marl.decision", ("torch", "pettingzoo", "gymnasium", "hydra")),
         ("rtaw_marl.envs.pettingzoo", EXTRAS),
         ("rtaw_marl.policies", EXTRAS),
         ("rtaw_marl.cli", (*EXTRAS, "pettingzoo", "numpy")),

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rtaw_marl.envs.features import RELATION_FEATURES, sim_relations
+from rtaw_marl.decision.features import RELATION_FEATURES, sim_relations
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.lookahead import lookahead_costs

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from rtaw_marl.envs.features import sim_observation
+from rtaw_marl.decision.features import sim_observation
 from rtaw_marl.models.checkpoint import build_networks
 from rtaw_marl.models.config import RTAWConfig, RTAWPlusConfig
 from rtaw_marl.policies import MPDM, make_baseline

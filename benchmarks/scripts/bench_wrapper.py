@@ -54,8 +54,9 @@ from torchrl.envs import PettingZooWrapper
 from torchrl.envs.libs.pettingzoo import MarlGroupMapType
 
 from rtaw_marl import warehouse_v1
-from rtaw_marl.envs.observations import ObservationLayout
+from rtaw_marl.decision.observations import ObservationLayout
 from rtaw_marl.envs.pettingzoo import zero_info
+from rtaw_marl.envs.spaces import agent_space
 from rtaw_marl.envs.torchrl_wrapper import WarehouseWrapper
 
 QUEUE_LEN = 10
@@ -78,7 +79,7 @@ class NoOpEnv(AECEnv):
         self._info = zero_info() if infos else {}
         layout = ObservationLayout("compact", "flat", num_robots, QUEUE_LEN)
         self.possible_agents = [f"robot_{i}" for i in range(num_robots)]
-        self.observation_spaces = dict.fromkeys(self.possible_agents, layout.space())
+        self.observation_spaces = dict.fromkeys(self.possible_agents, agent_space(layout))
         self.action_spaces = dict.fromkeys(self.possible_agents, spaces.Discrete(QUEUE_LEN))
         self._features = np.zeros(layout.flat_size, np.float32)
         self._mask = np.ones(QUEUE_LEN, np.int8)

@@ -28,9 +28,11 @@ from rtaw_marl.config import (
     to_typed,
 )
 from rtaw_marl.config.help import help_text, register_help
-from rtaw_marl.errors import ConfigError, RtawError
+from rtaw_marl.errors import ConfigError, RtawError, extra_message
 from rtaw_marl.evaluation.evaluate import SimPolicy
 from rtaw_marl.policies import make_baseline
+from rtaw_marl.policies.labels import checkpoint_labels
+from rtaw_marl.policies.user import import_policy, is_import_spec
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.signals import Interrupted, terminate_as_interrupt
@@ -211,7 +213,8 @@ def policy_names(names: list[str]) -> list[str]:
 
 
 def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
-    """Policies by name: baselines, ``checkpoint`` (one greedy policy per path in
+    """Policies by label: rules by name, your own by ``module:Name`` (label ``Name``;
+    :mod:`rtaw_marl.policies.user`), ``checkpoint`` (one greedy policy per path in
     ``cfg.checkpoint``) and ``pretrained`` (one per shipped policy named in
     ``cfg.pretrained``; ``rtaw`` is its deprecated name)."""
     names = policy_names(names)
@@ -223,22 +226,30 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
             raise ConfigError(f"{option}=... given but policy does not include '{option}'")
     policies: dict[str, SimPolicy] = {}
     for name in names:
-        if name not in sources:
+        if is_import_spec(name):
+            label, policy = import_policy(name)
+            _add(policies, label, policy)
+        elif name not in sources:
             policies[name] = make_baseline(
                 name, navigator=sim.navigator, scale=sim.layout.scale, params=cfg.baselines
             )
-            continue
-        try:
-            from rtaw_marl.policies.network import load_policy
-        except ModuleNotFoundError as exc:  # an install without the train extra
-            raise ConfigError(
-                f"policy={name} needs the training extra ({exc.name!r} is not installed): "
-                "pip install 'rtaw_marl[train]'"
-            ) from None
-        threads, k = int(cfg.torch_threads), cfg.candidates
-        for label, path in _learned(name, sources[name], k).items():
-            policies[label] = load_policy(path, name=label, torch_threads=threads, candidates=k)
+        else:
+            try:
+                from rtaw_marl.policies.network import load_policy
+            except ModuleNotFoundError as exc:  # an install without the train extra
+                raise ConfigError(extra_message(f"policy={name}", "train", exc.name)) from None
+            threads, k = int(cfg.torch_threads), cfg.candidates
+            for label, path in _learned(name, sources[name], k).items():
+                policy = load_policy(path, name=label, torch_threads=threads, candidates=k)
+                _add(policies, label, policy)
     return policies
+
+
+def _add(policies: dict[str, SimPolicy], label: str, policy: SimPolicy) -> None:
+    """Add ``policy`` under ``label``; two policies under one label is an error."""
+    if label in policies:
+        raise ConfigError(f"two policies are labelled {label!r}; each label names one policy")
+    policies[label] = policy
 
 
 def learned_files(cfg: Any, names: list[str]) -> dict[str, Path]:
@@ -260,18 +271,21 @@ def learned_files(cfg: Any, names: list[str]) -> dict[str, Path]:
 
 
 def _learned(option: str, sources: list[str], candidates: int | None) -> dict[str, str | Path]:
-    """Label (``rtaw:<source>``, ``rtaw:<source>@k<K>`` with ``candidates=K``) -> what
-    ``load_policy`` loads for each ``checkpoint=``
-    value (a path, or a shipped name) or ``pretrained=`` value (a shipped name only,
-    never a file)."""
+    """Label -> what ``load_policy`` loads for each ``checkpoint=`` value (a path, or a
+    shipped name) or ``pretrained=`` value (a shipped name only, never a file).
+
+    Labels are short: a shipped policy's name, a checkpoint file's
+    :func:`~rtaw_marl.policies.labels.checkpoint_labels`; ``@k<K>`` is added with
+    ``candidates=K`` (a policy restricted to K candidates is another policy, with its own
+    journal entries).
+    """
     from rtaw_marl.policies.pretrained.registry import pretrained_path
 
-    # A policy restricted to K candidates is another policy: its own label (and journal
-    # entries).
     tag = "" if candidates is None else f"@k{candidates}"
     if option == "pretrained":
-        return {f"rtaw:{source}{tag}": pretrained_path(source) for source in sources}
-    return {f"rtaw:{source}{tag}": source for source in sources}
+        return {f"{source}{tag}": pretrained_path(source) for source in sources}
+    labels = checkpoint_labels(sources)
+    return {f"{label}{tag}": source for label, source in zip(labels, sources, strict=True)}
 
 
 def as_list(value: object) -> list[str]:

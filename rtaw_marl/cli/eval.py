@@ -17,7 +17,9 @@ SIGTERM stops with one line saying how many finished episodes the journal keeps 
 episodes by the contents of the files they depend on (map, task file, checkpoints).
 
 The report (the layout line, the tables, notes) goes to stdout and is saved as
-``<stem>.txt`` beside ``results.json`` (``results.txt``); progress goes to stderr: the
+``<stem>.txt`` beside ``results.json`` (``results.txt``), and one row per policy and
+seed with every metric as a column in ``<stem>.csv`` (``pandas.read_csv`` loads it as
+is); progress goes to stderr: the
 bar only when stderr is a terminal, the ``estimated time`` line always. So
 ``rtaw-eval ... > table.txt`` is a clean table file. ``s/episode`` is each policy's
 mean wall time per episode after an untimed warm-up of a few decisions
@@ -61,6 +63,7 @@ from rtaw_marl.evaluation.journal import (
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
 from rtaw_marl.evaluation.throughput import throughput_table
+from rtaw_marl.evaluation.tidy import write_episodes_csv
 from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcript_path
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
@@ -84,7 +87,12 @@ def run(cfg: DictConfig | EvalConfig) -> dict:
     output = Path(cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json")
     # Checked and held before any work, so a bad path does not cost a whole evaluation
     # and two runs never write the same results.
-    siblings = (journal_path(output).name, transcript_path(output).name)
+    siblings = (journal_path(output).name, transcript_path(output).name, _csv(output).name)
+    if output.name in siblings:
+        raise ConfigError(
+            f"output={output}: the per-episode table {_csv(output).name} and the "
+            "report are written beside it under its stem; name a .json file"
+        )
     with claim_file(output, siblings=siblings):
         report = Transcript()
         payload = _evaluate(cfg, names, seeds, output, report)
@@ -142,7 +150,13 @@ def _evaluate(
     }
     path = write_json_atomic(output, payload)
     report.print(f"results: {path}")
+    report.print(f"episodes: {write_episodes_csv(_csv(output), results, seeds)}")
     return payload
+
+
+def _csv(output: Path) -> Path:
+    """The per-episode table beside ``results.json``: ``results.csv``."""
+    return output.with_name(f"{output.stem}.csv")
 
 
 def _to_stderr(line: str) -> None:

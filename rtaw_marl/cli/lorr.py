@@ -32,6 +32,7 @@ from rtaw_marl.integrations.lorr.entry import RunSpec
 from rtaw_marl.integrations.lorr.kit import build_kit
 from rtaw_marl.integrations.lorr.run import LoRRRun, run_lifelong
 from rtaw_marl.policies import BASELINES
+from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.runs import check_writable_file
@@ -111,10 +112,10 @@ def _learned(cfg: LoRRConfig, option: str, given: list[str], common: dict[str, A
 
     tag = "" if cfg.candidates is None else f"@k{cfg.candidates}"
     out = {}
-    for source in given:
+    for source, label in zip(given, checkpoint_labels(given), strict=True):
         # Resolved here, so a bad name or file is one line before any run.
         path = checkpoint_path(source)
-        out[f"rtaw:{source}{tag}"] = RunSpec(
+        out[f"{label}{tag}"] = RunSpec(
             policy=option, source=str(path), candidates=cfg.candidates, stats="stats.json",
             **common,
         )  # fmt: skip

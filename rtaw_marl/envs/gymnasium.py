@@ -113,8 +113,9 @@ import numpy as np
 from gymnasium import spaces
 
 from rtaw_marl import register_envs
-from rtaw_marl.envs.observations import AgentViews, ObservationLayout
+from rtaw_marl.decision.observations import AgentViews, ObservationLayout
 from rtaw_marl.envs.pettingzoo import reset_option_keys, zero_info
+from rtaw_marl.envs.spaces import features_space
 from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.errors import ConfigError, EnvUsageError, usage_error
 from rtaw_marl.sim.builder import SimSpec, build_sim
@@ -162,7 +163,7 @@ class WarehouseEnv(gymnasium.Env):
         )
         self.sim: WarehouseSim = build_sim(spec)
         self.render_mode = render_mode
-        self.observation_space = self.obs_layout.features_space()
+        self.observation_space = features_space(self.obs_layout)
         self.action_space = spaces.Discrete(spec.env.queue_len)
         self._views = AgentViews(self.sim, self.obs_layout)
         self._robot = 0  # the robot of the last observation handed out

@@ -189,7 +189,8 @@ from pettingzoo import AECEnv
 from pettingzoo.utils import wrappers
 
 from rtaw_marl import register_envs
-from rtaw_marl.envs.observations import AgentViews, Features, ObservationLayout, state_vector
+from rtaw_marl.decision.observations import AgentViews, Features, ObservationLayout, state_vector
+from rtaw_marl.envs.spaces import agent_space, state_space
 from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.errors import (
     ConfigError,
@@ -368,9 +369,9 @@ class raw_env(AECEnv):
         self.possible_agents = [f"robot_{i}" for i in range(m)]
         self._index = {name: i for i, name in enumerate(self.possible_agents)}
         # One space object per kind: every agent's spaces are identical.
-        self.observation_spaces = dict.fromkeys(self.possible_agents, self.obs_layout.space())
+        self.observation_spaces = dict.fromkeys(self.possible_agents, agent_space(self.obs_layout))
         self.action_spaces = dict.fromkeys(self.possible_agents, spaces.Discrete(n))
-        self.state_space = self.obs_layout.state_space()
+        self.state_space = state_space(self.obs_layout)
         self.np_random, self.np_random_seed = seeding.np_random()
         self._views = AgentViews(self.sim, self.obs_layout)
 

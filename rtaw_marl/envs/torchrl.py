@@ -59,7 +59,7 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.features import (
+from rtaw_marl.decision.features import (
     ALL_KEYS,
     FEATURES,
     OBSERVATION_KEYS,
@@ -106,8 +106,8 @@ class BatchedWarehouseEnv(EnvBase):
         num_envs: ``B``.
         seed: Base seed of the episode seeds.
         keys: The observation entries to compute and return (``action_mask`` always):
-            any of :data:`~rtaw_marl.envs.features.ALL_KEYS`, by default the five of
-            :data:`~rtaw_marl.envs.features.FEATURES`. A trainer asks for what its
+            any of :data:`~rtaw_marl.decision.features.ALL_KEYS`, by default the five of
+            :data:`~rtaw_marl.decision.features.FEATURES`. A trainer asks for what its
             networks read: RTAW+ with ``model.fleet_summary`` needs no ``[B, M, ...]``
             entry, so neither the env's cost nor a batch's size grows with ``M``.
 

@@ -43,7 +43,7 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.observations import Features
+from rtaw_marl.decision.observations import Features
 from rtaw_marl.envs.pettingzoo import raw_env
 from rtaw_marl.sim.inputs import training_seed
 

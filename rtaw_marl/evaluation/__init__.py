@@ -1,7 +1,12 @@
-"""Evaluation of policies on seeded episodes, paired statistics, tables and result files."""
+"""Evaluation of policies on seeded episodes, paired statistics, tables and result files.
+
+:func:`compare` is the one call for a user's policy against the rules (paired 95%
+intervals); :func:`evaluate` plays given policies on given seeds of one simulator.
+"""
 
 from __future__ import annotations
 
+from rtaw_marl.evaluation.compare import DEFAULT_RULES, Comparison, compare
 from rtaw_marl.evaluation.evaluate import evaluate, run_episode
 from rtaw_marl.evaluation.report import (
     comparisons,
@@ -19,8 +24,11 @@ from rtaw_marl.evaluation.stats import (
 )
 
 __all__ = [
+    "DEFAULT_RULES",
+    "Comparison",
     "HindsightShare",
     "PairedDiff",
+    "compare",
     "comparisons",
     "evaluate",
     "format_table",

@@ -57,7 +57,7 @@ except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
 import rtaw_marl
-from rtaw_marl.envs.features import (
+from rtaw_marl.decision.features import (
     NUM_RIVALS,
     RELATION_FEATURES,
     RIVAL_FEATURES,

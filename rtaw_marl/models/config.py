@@ -50,7 +50,7 @@ class RTAWPlusConfig:
             the acting robot's relational view, as the actor (an ablation).
         fleet_summary: With ``critic_fleet``, the critic reads the fleet as a fixed-size
             summary (``fleet [8]``: quantiles and mean of the robots' times until
-            free, :func:`~rtaw_marl.envs.features.fleet_features`) instead of every
+            free, :func:`~rtaw_marl.decision.features.fleet_features`) instead of every
             robot's row (``robots [M, 3]``): neither the update's cost nor a batch's
             size then grows with ``M``, and simulators with different fleets can share
             a batch (``mix``). ``False`` is the shipped per-row policies' critic.

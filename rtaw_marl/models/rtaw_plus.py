@@ -1,7 +1,7 @@
 """RTAW+: a relational attention network (beyond the paper; ``model=rtaw_plus``).
 
 The paper's network sees coordinates and must learn distances and competition between
-robots itself. RTAW+ reads the relational features of :mod:`rtaw_marl.envs.features`
+robots itself. RTAW+ reads the relational features of :mod:`rtaw_marl.decision.features`
 instead, and lets each queued task look at the robots that compete for it and at the
 other tasks. Shapes: ``*`` batch dimensions, ``N`` queue slots, ``K = NUM_RIVALS`` rival
 tokens per task, ``M`` robots (critic only), ``E = embed_dim``, ``H = heads``.
@@ -40,7 +40,7 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.features import (
+from rtaw_marl.decision.features import (
     FLEET_FEATURES,
     RELATION_FEATURES,
     RIVAL_FEATURES,

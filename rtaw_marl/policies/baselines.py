@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from rtaw_marl.envs.observations import read_features
+from rtaw_marl.decision.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.base import simulator_of
 from rtaw_marl.sim.core import WarehouseSim

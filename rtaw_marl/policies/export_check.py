@@ -24,7 +24,7 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.observations import read_features
+from rtaw_marl.decision.observations import read_features
 from rtaw_marl.models.checkpoint import Actor
 from rtaw_marl.policies.network import NetworkPolicy
 

@@ -2,7 +2,7 @@
 
 Every input tensor of the exported RTAW (``model=rtaw``) and RTAW+ (``model=rtaw_plus``)
 actors is one entry of the ``warehouse_v1`` observation, with a leading batch axis: its
-columns are those of :mod:`rtaw_marl.envs.features` (the one observation builder), and
+columns are those of :mod:`rtaw_marl.decision.features` (the one observation builder), and
 their meaning, unit and range are written once here, in :data:`COLUMNS`. The sidecar
 JSON of an export, the metadata embedded in the exported file and ``docs/export.md`` are
 made from :func:`input_spec`. Plain Python: no torch.
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rtaw_marl.envs.features import (
+from rtaw_marl.decision.features import (
     MISSING,
     NUM_RIVALS,
     RELATION_FEATURES,

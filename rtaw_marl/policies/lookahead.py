@@ -27,8 +27,8 @@ from collections.abc import Mapping
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from rtaw_marl.envs.features import candidate_slots, robot_features
-from rtaw_marl.envs.observations import read_features
+from rtaw_marl.decision.features import candidate_slots, robot_features
+from rtaw_marl.decision.observations import read_features
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.baselines import BaselinePolicy, free_times
 from rtaw_marl.sim.core import WarehouseSim

@@ -2,13 +2,13 @@
 
 A :class:`NetworkPolicy` acts on the bare simulator (``act_sim``, the evaluation's fast
 path) and on ``warehouse_v1`` observations (``act``); both feed the network the
-very arrays of :func:`~rtaw_marl.envs.features.decision_features`, so they choose the
+very arrays of :func:`~rtaw_marl.decision.features.decision_features`, so they choose the
 same slot bit for bit. The paper's network (``model=rtaw``) reads ``robots``, ``tasks``
 and ``agent``: it needs ``observation="full"``; RTAW+ (``model=rtaw_plus``) reads
 ``relations`` and ``rivals``: ``"full"`` or ``"compact"``; dict or flat features alike.
 
 With ``candidates=K`` a policy scores only the ``K`` queued tasks whose origins are
-nearest the free robot (:func:`~rtaw_marl.envs.features.candidate_slots`) when the queue
+nearest the free robot (:func:`~rtaw_marl.decision.features.candidate_slots`) when the queue
 holds more: on the fast path only their features are computed, so a decision costs
 ``O(K)`` network work and ``O(N)`` cheap distance lookups, not ``O(N)`` network work.
 """
@@ -32,10 +32,11 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.features import candidate_slots, sim_observation
-from rtaw_marl.envs.observations import read_features
+from rtaw_marl.decision.features import candidate_slots, sim_observation
+from rtaw_marl.decision.observations import read_features
 from rtaw_marl.models.checkpoint import Actor, load_checkpoint, load_networks
 from rtaw_marl.models.rtaw_plus import RTAWPlusActor
+from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.core import WarehouseSim
 
@@ -60,7 +61,8 @@ def load_policy(
         source: A checkpoint path, or the name of a shipped policy
             (``rtaw_marl.policies.pretrained.registry.PRETRAINED``, e.g.
             ``"shelves_astar_m10_plus"``).
-        name: Label in result tables; ``rtaw:<source>`` by default.
+        name: Label in result tables; by default a shipped policy's name, or the end of
+            the checkpoint's path (:func:`~rtaw_marl.policies.labels.checkpoint_labels`).
         torch_threads: ``torch.set_num_threads`` for the process (one decision is a small
             network: with every thread an episode takes about ten times longer);
             ``None`` leaves torch as it is.
@@ -79,7 +81,8 @@ def load_policy(
     if torch_threads is not None:
         torch.set_num_threads(int(torch_threads))
     actor, _ = load_networks(load_checkpoint(path), path)
-    return NetworkPolicy(actor, name=name or f"rtaw:{source}", candidates=candidates)
+    label = name or checkpoint_labels([str(source)])[0]
+    return NetworkPolicy(actor, name=label, candidates=candidates)
 
 
 def checkpoint_path(source: str | Path) -> Path:

@@ -43,7 +43,7 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.features import FEATURES
+from rtaw_marl.decision.features import FEATURES
 from rtaw_marl.envs.mixed import MixedBatchedEnv
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.scenarios.mix import mix_specs

@@ -16,7 +16,7 @@ try:
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
-from rtaw_marl.envs.features import FEATURES
+from rtaw_marl.decision.features import FEATURES
 from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.models.actor_critic import greedy_action

@@ -467,13 +467,13 @@ def test_the_generalist_is_selected_by_name_on_any_scenario(
     )  # fmt: skip
     assert result.code == 0, result.err
     policies = json.loads(out.read_text())["policies"]
-    assert set(policies) == {"mpdm", "rtaw:generalist_plus"}
-    assert all(ttd > 0 for ttd in policies["rtaw:generalist_plus"]["ttd"])
+    assert set(policies) == {"mpdm", "generalist_plus"}
+    assert all(ttd > 0 for ttd in policies["generalist_plus"]["ttd"])
 
 
 def test_candidates_restrict_learned_policies_under_their_own_label(tmp_path: Path, cli) -> None:
     """``candidates=K`` evaluates the learned policy on the K nearest tasks, labelled
-    ``rtaw:NAME@kK`` (its own journal entries); it is one clear error when not >= 1."""
+    ``NAME@kK`` (its own journal entries); it is one clear error when not >= 1."""
     out = tmp_path / "k.json"
     result = cli(
         "eval", "scenario=poc", "env.queue_len=12", "policy=pretrained",
@@ -481,8 +481,83 @@ def test_candidates_restrict_learned_policies_under_their_own_label(tmp_path: Pa
         f"output={out}",
     )  # fmt: skip
     assert result.code == 0, result.err
-    assert list(json.loads(out.read_text())["policies"]) == ["rtaw:shelves_astar_m10_plus@k4"]
+    assert list(json.loads(out.read_text())["policies"]) == ["shelves_astar_m10_plus@k4"]
     bad = cli("eval", "scenario=poc", "candidates=0", "progress=false")
     assert bad.code == 2
     assert "candidates must be >= 1" in bad.err
     assert "Traceback" not in bad.err
+
+
+# --------------------------------------------------------------------------- your policy
+USER_MODULE = """
+import numpy as np
+
+
+def first_queued(sim):
+    return int(np.flatnonzero(sim.queue_mask)[0])
+
+
+class Nearest:
+    name = "Nearest"
+
+    def reset(self, seed=None):
+        pass
+
+    def act_sim(self, sim):
+        return int(np.where(sim.queue_mask, sim.robot_distances(), np.inf).argmin())
+"""
+
+
+def test_a_user_policy_by_module_and_name(cli, tmp_path: Path) -> None:
+    """``policy=[mpdm,my_rules:first_queued,my_rules:Nearest]`` imports the user's module
+    from the working directory; labels are the attribute names; the per-episode CSV sits
+    beside results.json, and no lock file is left."""
+    (tmp_path / "my_rules.py").write_text(USER_MODULE)
+    out = tmp_path / "r.json"
+    result = cli(
+        "eval", "scenario=poc", "policy=[mpdm,my_rules:first_queued,my_rules:Nearest]",
+        "seeds=[0,1]", f"output={out}", "progress=false",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    policies = json.loads(out.read_text())["policies"]
+    assert list(policies) == ["mpdm", "first_queued", "Nearest"]
+    assert "| first_queued |" in result.out
+    rows = (tmp_path / "r.csv").read_text().splitlines()
+    assert rows[0].startswith("policy,seed,ttd,")
+    assert [r.split(",")[:2] for r in rows[1:]] == [
+        [p, s] for p in ("mpdm", "first_queued", "Nearest") for s in ("0", "1")
+    ]
+    assert not list(tmp_path.glob(".*.lock"))
+
+
+@pytest.mark.parametrize(
+    ("policy", "message"),
+    [
+        ("no_such_module:Rule", "no module named 'no_such_module'"),
+        ("my_rules:Nearst", "my_rules has no 'Nearst'; its callables: Nearest, first_queued"),
+        ("my_rules:", "a user policy is named module:Name"),
+    ],
+)
+def test_a_bad_user_policy_is_one_line(cli, tmp_path: Path, policy: str, message: str) -> None:
+    (tmp_path / "my_rules.py").write_text(USER_MODULE)
+    result = cli("eval", "scenario=poc", f"policy=[mpdm,'{policy}']", "seeds=[0]")
+    assert result.code == 2
+    assert message in result.err
+    assert "Traceback" not in result.err
+
+
+def test_checkpoint_labels_are_short_and_distinct() -> None:
+    from rtaw_marl.policies.labels import checkpoint_labels
+
+    assert checkpoint_labels(["runs/demo/checkpoints/best.pt"]) == ["demo/best"]
+    assert checkpoint_labels(["generalist_plus"]) == ["generalist_plus"]
+    assert checkpoint_labels(["a/x/checkpoints/best.pt", "b/x/checkpoints/best.pt"]) == [
+        "a/x/best",
+        "b/x/best",
+    ]
+
+
+def test_an_output_named_like_its_table_is_refused(cli, tmp_path: Path) -> None:
+    result = cli("eval", "scenario=poc", "seeds=[0]", f"output={tmp_path / 'r.csv'}")
+    assert result.code == 2
+    assert "name a .json file" in result.err

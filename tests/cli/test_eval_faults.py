@@ -27,6 +27,7 @@ import rtaw_marl.cli.eval as eval_cli
 import rtaw_marl.evaluation.journal as journal_module
 from rtaw_marl.evaluation.evaluate import TimeEstimate
 from rtaw_marl.evaluation.journal import file_digest, journal_path
+from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.policies.pretrained.registry import SHIPPED
 from rtaw_marl.utils.signals import Interrupted
 
@@ -62,7 +63,7 @@ def test_a_checkpoint_replaced_at_the_same_path_runs_only_its_episodes_again(
     shutil.copy(SHIPPED / "A_astar_m10_plus.pt", ckpt)
     result = cli("eval", *args, f"output={out}", "resume=true")
     assert result.code == 0, result.err
-    label = f"rtaw:{ckpt}"
+    label = checkpoint_labels([str(ckpt)])[0]  # the file's name, not its whole path
     assert f"resume: the file of {label} has changed since 2 of its episodes were " in result.out
     after = json.loads(out.read_text())["policies"]
     assert cli("eval", *args, f"output={tmp_path / 'fresh.json'}").code == 0

@@ -46,7 +46,7 @@ def test_two_policies_side_by_side(tmp_path: Path, capsys: pytest.CaptureFixture
     assert run(compose(config_name="view", overrides=overrides)) == out
     captured = capsys.readouterr()
     names = [ep["name"] for ep in _episodes(out)]
-    assert names == ["mpdm", "rtaw:A_astar_m10"]
+    assert names == ["mpdm", "A_astar_m10"]
     assert "mpdm: TTD" in captured.out
     assert f"viewer: {out}" in captured.out
     assert "packing mpdm: 10 robots" in captured.err  # progress on stderr

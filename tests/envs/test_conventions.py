@@ -21,8 +21,8 @@ from gymnasium.utils import seeding
 from pettingzoo.test import api_test, performance_benchmark, render_test, seed_test
 
 from rtaw_marl import warehouse_v1
-from rtaw_marl.envs.features import nearest_other, relational_features
-from rtaw_marl.envs.observations import FEATURE_KEYS
+from rtaw_marl.decision.features import nearest_other, relational_features
+from rtaw_marl.decision.observations import FEATURE_KEYS
 from rtaw_marl.envs.pettingzoo import zero_info
 from rtaw_marl.sim.metrics import EpisodeMetrics
 from tests.envs.test_pettingzoo import first_valid, is_done, play, unexpected_warnings
@@ -131,7 +131,7 @@ def test_layouts_and_sizes() -> None:
             assert features.shape == (layout.flat_size,) == (expected,)
         else:
             assert set(features.spaces) == set(FEATURE_KEYS[observation])
-        # Scalar (-inf, inf) bounds everywhere (see ObservationLayout.features_space).
+        # Scalar (-inf, inf) bounds everywhere (see rtaw_marl.envs.spaces.features_space).
         for box in features.spaces.values() if obs_format == "dict" else [features]:
             assert np.all(box.low == -np.inf)
             assert np.all(box.high == np.inf)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rtaw_marl import warehouse_v1
-from rtaw_marl.envs.features import MISSING, NUM_RIVALS, SOFTMIN_TEMPERATURE
+from rtaw_marl.decision.features import MISSING, NUM_RIVALS, SOFTMIN_TEMPERATURE
 from tests.envs.test_pettingzoo import first_valid, is_done, oracle_distance
 
 pytestmark = pytest.mark.unit
@@ -83,7 +83,7 @@ def test_compiled_rivals_equal_a_stable_sort_of_every_robot() -> None:
     """The acting robot's rivals (compiled, one pass over the fleet) are the first ``k``
     of a stable sort of ``arrival - own`` over all other robots: ties (integer grid
     distances, many robots free now) go to the lowest robot id, at the k-th place too."""
-    from rtaw_marl.envs.features import _actor_rivals
+    from rtaw_marl.decision.features import _actor_rivals
 
     rng = np.random.default_rng(0)
     for _ in range(300):
@@ -105,7 +105,7 @@ def test_compiled_rivals_equal_a_stable_sort_of_every_robot() -> None:
 
 @pytest.mark.parametrize("m", [1, 2, 7, 1000])
 def test_fleet_summary_is_quantiles_and_mean_of_the_times_until_free(m: int) -> None:
-    from rtaw_marl.envs.features import FLEET_QUANTILES, fleet_features
+    from rtaw_marl.decision.features import FLEET_QUANTILES, fleet_features
 
     rng = np.random.default_rng(m)
     free_at = rng.random((3, m)) * 50.0

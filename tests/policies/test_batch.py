@@ -86,7 +86,7 @@ def test_parameters_and_the_observation_path() -> None:
 def test_lookahead_on_k_candidates_is_lookahead_on_that_sub_queue() -> None:
     """lookahead_candidates=K: with K >= the queue it is lookahead itself; with fewer it
     picks among the K origins nearest the free robot."""
-    from rtaw_marl.envs.features import candidate_slots
+    from rtaw_marl.decision.features import candidate_slots
     from rtaw_marl.scenarios import SCENARIOS
     from rtaw_marl.sim.builder import build_sim
 

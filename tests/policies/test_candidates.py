@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rtaw_marl import warehouse_v1
-from rtaw_marl.envs.features import candidate_slots, nearest_other, sim_observation
+from rtaw_marl.decision.features import candidate_slots, nearest_other, sim_observation
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import run_episode
 from rtaw_marl.sim.core import WarehouseSim

@@ -14,7 +14,7 @@ import pytest
 import torch
 
 from rtaw_marl import warehouse_v1
-from rtaw_marl.envs.features import feature_shapes
+from rtaw_marl.decision.features import feature_shapes
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies import export as export_module
 from rtaw_marl.policies.export import (

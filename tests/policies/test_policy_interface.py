@@ -127,7 +127,7 @@ def test_load_policy_names_and_threads() -> None:
         assert torch.get_num_threads() == 2
         policy = load_policy("shelves_astar_m10_plus")
         assert torch.get_num_threads() == 1
-        assert policy.name == "rtaw:shelves_astar_m10_plus"
+        assert policy.name == "shelves_astar_m10_plus"
     finally:
         torch.set_num_threads(before)
     with pytest.raises(ConfigError, match="did you mean shelves_astar_m10_plus"):

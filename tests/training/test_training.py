@@ -17,6 +17,7 @@ from rtaw_marl.models.checkpoint import (
     load_checkpoint,
     save_checkpoint,
 )
+from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.evaluator import greedy_ttd
 from rtaw_marl.training.ppo import train
@@ -237,7 +238,7 @@ def test_train_then_eval_cli_on_other_sizes(tmp_path: Path) -> None:
         timeout=300,
     )
     assert ev.returncode == 0, ev.stderr
-    assert f"rtaw:{ckpt}" in ev.stdout
+    assert checkpoint_labels([str(ckpt)])[0] in ev.stdout
 
 
 def test_interrupted_save_keeps_previous_checkpoint(tmp_path: Path, monkeypatch) -> None:

@@ -165,7 +165,7 @@ def test_header_lines_fit_the_picture(layout: Layout, schedule: Schedule, tmp_pa
     from rtaw_marl.viz.gif import _font, fit_text
 
     font = _font(12)
-    long = "rtaw:generalist_plus | sipp | layout_A_60x60 | seed 0   " * 3
+    long = "generalist_plus@k32 | sipp | layout_A_60x60 | seed 0   " * 3
     fitted = fit_text(long, font, 200)
     assert fitted.endswith("…")
     assert font.getlength(fitted) <= 200

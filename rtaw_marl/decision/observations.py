@@ -1,4 +1,4 @@
-"""Observation layouts of the PettingZoo env: spaces, every agent's view, the global state.
+"""Observation layouts of the PettingZoo env: every agent's view, the global state.
 
 Two choices make a layout (:class:`ObservationLayout`):
 
@@ -10,6 +10,9 @@ Two choices make a layout (:class:`ObservationLayout`):
 
 :class:`AgentViews` computes the features of a decision once, for any number of
 ``observe`` calls. :func:`state_vector` is the global state (``AECEnv.state``).
+:func:`read_features` reads a policy's features back from an observation. The
+Gymnasium spaces of a layout are the env adapters' (:mod:`rtaw_marl.envs.spaces`):
+this module imports neither Gymnasium nor PettingZoo.
 """
 
 from __future__ import annotations
@@ -20,9 +23,8 @@ from math import prod
 from typing import Any
 
 import numpy as np
-from gymnasium import spaces
 
-from rtaw_marl.envs.features import (
+from rtaw_marl.decision.features import (
     FEATURES,
     ROBOT_FEATURES,
     Decision,
@@ -62,7 +64,9 @@ Features = dict[str, np.ndarray] | np.ndarray
 
 @dataclass(frozen=True)
 class ObservationLayout:
-    """Shapes and spaces of one observation option.
+    """Shapes and flat vector of one observation option.
+
+    Its Gymnasium spaces are built by the env adapters (:mod:`rtaw_marl.envs.spaces`).
 
     Args:
         observation: ``"full"`` or ``"compact"``.
@@ -112,34 +116,6 @@ class ObservationLayout:
         """Length of the flat vector: ``3M + 46N + 3`` (full) or ``46N + 3`` (compact)."""
         return sum(prod(shape) for shape in self.shapes.values())
 
-    def features_space(self) -> spaces.Dict | spaces.Box:
-        """The space of the ``"observation"`` entry.
-
-        Every Box is declared ``(-inf, inf)`` with scalar bounds, on purpose: TorchRL turns
-        a finite bound into a ``Bounded`` spec, and ``PettingZooWrapper`` indexes the
-        stacked spec once per agent per step, copying the bounds of all ``M`` agents each
-        time (measured at ``M = 1000``: 6-15 ms per agent against 0.04-0.13 ms unbounded).
-        The real ranges are in the env docstring.
-        """
-        if self.obs_format == "flat":
-            return spaces.Box(-np.inf, np.inf, (self.flat_size,), np.float32)
-        return spaces.Dict(
-            {
-                key: spaces.Box(-np.inf, np.inf, shape, np.float32)
-                for key, shape in self.shapes.items()
-            }
-        )
-
-    def space(self) -> spaces.Dict:
-        """One agent's observation space: ``{"observation": ..., "action_mask": int8 [N]}``."""
-        mask = spaces.Box(0, 1, (self.queue_len,), np.int8)
-        return spaces.Dict({"observation": self.features_space(), "action_mask": mask})
-
-    def state_space(self) -> spaces.Box:
-        """The space of :func:`state_vector`: ``float32 [3M + 7N]``, every entry ``>= 0``."""
-        size = self.num_robots * len(ROBOT_FEATURES) + self.queue_len * len(QUEUE_STATE_FEATURES)
-        return spaces.Box(0.0, np.inf, (size,), np.float32)
-
     def flatten(self, features: Mapping[str, np.ndarray]) -> np.ndarray:
         """Dict features ``[..., *shape]`` (leading dims shared) -> ``float32 [..., flat_size]``."""
         shapes = self.shapes
@@ -165,7 +141,7 @@ def read_features(
         observation: ``{"observation": features, "action_mask": [N]}`` as ``observe`` or
             ``last()`` give it, with dict or flat features (``observation="full"`` or
             ``"compact"``; a flat vector's layout is told by its size and ``N``).
-        keys: Feature keys to read (:data:`~rtaw_marl.envs.features.FEATURES`).
+        keys: Feature keys to read (:data:`~rtaw_marl.decision.features.FEATURES`).
         reader: Who reads them, for the error message.
 
     Returns:

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rtaw_marl.envs._rivals import actor_relations, first_rivals
+from rtaw_marl.decision._rivals import actor_relations, first_rivals
 
 if TYPE_CHECKING:
     from rtaw_marl.sim.core import WarehouseSim
