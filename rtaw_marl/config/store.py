@@ -25,7 +25,7 @@ from rtaw_marl.scenarios.lorr import lorr_value
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
-from rtaw_marl.training.logging_config import LOGGERS
+from rtaw_marl.training.loggers.config import LOGGER_OPTIONS
 from rtaw_marl.training.zoo import ZOO
 
 __all__ = ["CONF_DIR", "GROUPS", "register_configs"]
@@ -42,7 +42,7 @@ GROUPS: dict[str, dict[str, type]] = {
     "model": dict(MODELS),
     "algo": {"ppo": PPOConfig},
     "collector": {"default": CollectorConfig},
-    "logger": dict(LOGGERS),
+    "logger": dict(LOGGER_OPTIONS),
 }
 
 #: Primary configs -> their schema.

@@ -10,7 +10,7 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import SELECTION_SEEDS, seed_list, seed_value
-from rtaw_marl.training.logging_config import logger_option
+from rtaw_marl.training.loggers.config import logger_option
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
 __all__ = [
@@ -234,7 +234,7 @@ class TrainConfig(SimGroups):
         eval: Periodic greedy evaluation settings.
         imitation: The optional warm start by imitation.
         logger: Where the scalars go: a ``logger`` option (``csv``, ``tensorboard``,
-            ``mlflow``, ``wandb``, ``none``; :mod:`rtaw_marl.training.logging_config`) or
+            ``mlflow``, ``wandb``, ``none``; :mod:`rtaw_marl.training.loggers.config`) or
             its name.
         resume: A checkpoint to continue from (``last.pt``). It must hold the same
             scenario (env, layout, navigator, tasks, eval seeds) and fewer frames

@@ -53,7 +53,7 @@ from rtaw_marl.training.interop import (
     acting_reward,
     standardize_acting_advantage,
 )
-from rtaw_marl.training.logging import RunLogger, check_installed, quiet_torchrl_logs
+from rtaw_marl.training.loggers import RunLogger, build_logger, check_installed, quiet_torchrl_logs
 from rtaw_marl.utils.plain import as_plain
 from rtaw_marl.utils.runs import claim_folder
 from rtaw_marl.utils.signals import Interrupted, deferred_interrupt
@@ -211,7 +211,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history, nets[0].in_keys)
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
-    logger = RunLogger(run_dir, cfg.logger, config=as_plain(cfg))
+    logger = build_logger(run_dir, cfg.logger, config=as_plain(cfg))
     if cfg.init_actor is not None and progress.frames == 0:
         _init_actor(cfg, learner.actor_net)
     if cfg.imitation.teacher is not None and progress.frames == 0:

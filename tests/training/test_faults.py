@@ -20,7 +20,7 @@ import rtaw_marl.training.evaluator as evaluator_module
 from rtaw_marl.config import compose, to_typed
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
-from rtaw_marl.training.logging import METRICS_CSV, read_metrics
+from rtaw_marl.training.loggers import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import Estimate, _duration, train
 
 pytestmark = pytest.mark.integration

@@ -10,10 +10,23 @@ from pathlib import Path
 
 import pytest
 
+from rtaw_marl.config.store import CONF_DIR
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.training.checkpoints import trim_csv_logs
-from rtaw_marl.training.logging import METRICS_CSV, CSVMetrics, RunLogger, read_metrics
-from rtaw_marl.training.logging_config import LOGGERS, MLflowLoggerConfig, WandbLoggerConfig
+from rtaw_marl.training.loggers import (
+    LOGGERS,
+    METRICS_CSV,
+    CSVMetrics,
+    build_logger,
+    check_installed,
+    read_metrics,
+)
+from rtaw_marl.training.loggers.config import (
+    LOGGER_OPTIONS,
+    CSVLoggerConfig,
+    MLflowLoggerConfig,
+    WandbLoggerConfig,
+)
 from rtaw_marl.training.ppo import train
 
 pytestmark = pytest.mark.unit
@@ -108,7 +121,7 @@ def _uninstall(module: str, monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_no_logger_writes_nothing(tmp_path: Path) -> None:
-    logger = RunLogger(tmp_path, "none")
+    logger = build_logger(tmp_path, "none")
     logger.log({"a": 1.0}, 0)
     logger.close()
     assert not (tmp_path / "logs").exists()
@@ -123,7 +136,7 @@ def test_a_missing_package_names_its_extra(
 ) -> None:
     _uninstall(module, monkeypatch)
     with pytest.raises(ConfigError) as caught:
-        RunLogger(tmp_path, name)
+        build_logger(tmp_path, name)
     assert str(caught.value) == (
         f"logger={name} needs {package} (not installed): pip install 'rtaw_marl[{name}]'"
     )
@@ -158,8 +171,26 @@ def test_bad_logger_options_fail_clearly(overrides: list[str], message: str, cli
 
 
 def test_every_logger_option_has_its_defaults_and_a_name() -> None:
-    assert list(LOGGERS) == ["csv", "tensorboard", "none", "mlflow", "wandb"]
-    assert all(option().name == name for name, option in LOGGERS.items())
+    assert list(LOGGER_OPTIONS) == ["csv", "tensorboard", "none", "mlflow", "wandb"]
+    assert all(option().name == name for name, option in LOGGER_OPTIONS.items())
     # No network unless asked: MLflow's store in the run folder, W&B offline.
     assert MLflowLoggerConfig().tracking_uri is None
     assert WandbLoggerConfig().mode == "offline"
+
+
+def test_the_backend_registry_serves_exactly_the_yaml_logger_options() -> None:
+    yaml_options = {path.stem for path in (CONF_DIR / "logger").glob("*.yaml")}
+    assert set(LOGGERS) == yaml_options == set(LOGGER_OPTIONS)
+    assert all(backend.name == name for name, backend in LOGGERS.items())
+
+
+@pytest.mark.parametrize("option", ["foo", CSVLoggerConfig(name="foo")])
+def test_an_unknown_backend_is_one_error_listing_the_registry(
+    option: str | CSVLoggerConfig, tmp_path: Path
+) -> None:
+    message = "unknown logger 'foo'; available: csv, mlflow, none, tensorboard, wandb"
+    for call in (lambda: build_logger(tmp_path, option), lambda: check_installed(option)):
+        with pytest.raises(ConfigError) as caught:
+            call()
+        assert str(caught.value) == message
+    assert not (tmp_path / "logs").exists()

@@ -12,7 +12,7 @@ import pytest
 from mlflow.tracking import MlflowClient
 from wandb.proto import wandb_internal_pb2
 
-from rtaw_marl.training.logging_tracking import flat_params
+from rtaw_marl.training.loggers.mlflow_log import flat_params
 from rtaw_marl.training.ppo import train
 
 pytestmark = pytest.mark.integration

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rtaw_marl.training.logging import quiet_torchrl_logs
+from rtaw_marl.training.loggers import quiet_torchrl_logs
 from rtaw_marl.training.ppo import train
 
 pytestmark = pytest.mark.integration

@@ -19,7 +19,7 @@ import pytest
 import torch
 
 from rtaw_marl.models.checkpoint import load_checkpoint
-from rtaw_marl.training.logging import METRICS_CSV, read_metrics
+from rtaw_marl.training.loggers import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import train
 from tests.training.conftest import compose_train
 

@@ -16,7 +16,7 @@ import rtaw_marl.training.ppo as ppo
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.training.checkpoints import trim_csv_logs
-from rtaw_marl.training.logging import METRICS_CSV, read_metrics
+from rtaw_marl.training.loggers import METRICS_CSV, read_metrics
 from rtaw_marl.training.ppo import train
 
 pytestmark = pytest.mark.integration

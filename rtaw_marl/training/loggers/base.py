@@ -53,9 +53,8 @@ class Backend(ABC):
         """The one-line error for this backend's missing package (the extra installs
         beside an installed rtaw_marl, editable or not, as the CLI's others do)."""
         package = cls.requires[1] if cls.requires else cls.name
-        return ConfigError(
-            f"logger={cls.name} needs {package} (not installed): pip install 'rtaw_marl[{cls.name}]'"
-        )
+        install = f"pip install 'rtaw_marl[{cls.name}]'"
+        return ConfigError(f"logger={cls.name} needs {package} (not installed): {install}")
 
     @classmethod
     def check_installed(cls) -> None:

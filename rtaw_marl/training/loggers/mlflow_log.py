@@ -105,9 +105,7 @@ class MLflowBackend(Backend):
         self.run_id = self._run_id
 
     @classmethod
-    def start(
-        cls, option: LoggerConfig, run_dir: Path, config: Mapping[str, Any]
-    ) -> MLflowBackend:
+    def start(cls, option: LoggerConfig, run_dir: Path, config: Mapping[str, Any]) -> MLflowBackend:
         """A new MLflow run (``option``: its :class:`MLflowLoggerConfig`)."""
         return cls(option, run_dir, config)  # type: ignore[arg-type]
 
@@ -123,4 +121,3 @@ class MLflowBackend(Backend):
     def close(self) -> None:
         """Mark the run finished."""
         self._client.set_terminated(self._run_id)
-
