@@ -38,9 +38,18 @@ demo: $(STAMP)
 		pretrained=generalist_plus output=$(DEMO_RUN)/view.html
 
 # LoRR's start kit (../shared), built once per machine into ~/.cache/rtaw_marl/lorr: a
-# few minutes the first time (apt-get installs cmake and Boost where missing), then
-# nothing. Its tests (tests/integrations/test_lorr_kit.py) run rtaw_marl schedulers in it.
+# few minutes the first time, then nothing. The system packages it needs (cmake, Boost)
+# are installed here with apt-get when missing and root; the library itself never installs
+# any. Its tests (tests/integrations/test_lorr_kit.py) run rtaw_marl schedulers in it.
 lorr-kit: $(STAMP)
+	@missing="$$($(BIN)/python -m rtaw_marl.integrations.lorr.kit --missing)"; \
+	if [ -n "$$missing" ]; then \
+		if [ "$$(id -u)" != 0 ]; then \
+			echo "error: LoRR's start kit needs: sudo apt-get install $$missing" >&2; exit 2; fi; \
+		export DEBIAN_FRONTEND=noninteractive; \
+		apt-get install -y -qq --no-install-recommends $$missing >/dev/null || \
+			{ apt-get update -qq && apt-get install -y -qq --no-install-recommends $$missing >/dev/null; }; \
+	fi
 	$(BIN)/python -m rtaw_marl.integrations.lorr.kit
 
 # Headless Chromium and its driver (Debian's packages) for the viewer's browser tests

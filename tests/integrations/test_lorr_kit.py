@@ -181,9 +181,22 @@ def test_missing_kit_and_packages_are_clear(
     with pytest.raises(StartKitError, match="not found at"):
         kit_source(tmp_path)
     monkeypatch.setattr(kit_module, "missing_packages", lambda: ["libboost-log-dev"])
-    monkeypatch.setattr(kit_module.os, "geteuid", lambda: 1000)
+    # The library never installs system packages, root or not: it names the command.
+    calls: list[list[str]] = []
+    monkeypatch.setattr(kit_module.subprocess, "run", lambda cmd, **_: calls.append(cmd))
     with pytest.raises(StartKitError, match=r"apt-get install -y .*libboost-log-dev"):
-        kit_module.ensure_system_packages(lambda line: None)
+        kit_module.check_system_packages()
+    assert calls == []
+
+
+def test_the_makefile_asks_the_kit_what_to_install(capsys: pytest.CaptureFixture[str]) -> None:
+    """``make lorr-kit`` installs what ``--missing`` prints (nothing, on a ready machine)."""
+    kit_module.main(["--missing"])
+    printed = capsys.readouterr().out.split()
+    assert printed == kit_module.missing_packages()
+    with pytest.raises(SystemExit) as exit_info:
+        kit_module.main(["--mising"])
+    assert exit_info.value.code == 2
     with pytest.raises(StartKitError, match="unknown start kit build"):
         build_kit("gpu")
 

@@ -10,9 +10,9 @@ file lock in a temporary folder, then renamed, so concurrent callers (test worke
 build it once and never see half a build.
 
 What it needs: cmake, a C++17 compiler, make, Boost (program_options, system,
-filesystem, log) and pybind11 (``pip install 'rtaw_marl[lorr]'``). Missing system
-packages are installed with ``apt-get`` when this process may (root); otherwise the
-error names the command.
+filesystem, log) and pybind11 (``pip install 'rtaw_marl[lorr]'``). The library installs
+no system package: a missing one is an error naming the ``apt-get`` command, and
+``make lorr-kit`` installs them (``--missing`` prints their Debian names).
 """
 
 from __future__ import annotations
@@ -129,7 +129,7 @@ def build_kit(
     with _locked(root / f".{variant}.lock"):
         if build.lifelong.is_file():  # another process built it meanwhile
             return build
-        ensure_system_packages(log)
+        check_system_packages()
         log(f"building LoRR's start kit v{KIT_VERSION} ({variant}) into {build.root} ...")
         tmp = root / f".{build.root.name}.tmp"
         shutil.rmtree(tmp, ignore_errors=True)
@@ -150,28 +150,20 @@ def missing_packages() -> list[str]:
     return missing
 
 
-def ensure_system_packages(log: Callable[[str], None]) -> None:
-    """Install the missing packages with ``apt-get`` (as root), or say which.
+def check_system_packages() -> None:
+    """Refuse to build when the build's tools or libraries are missing.
 
     Raises:
-        StartKitError: Packages are missing and cannot be installed here.
+        StartKitError: Packages are missing; the message names the command that installs
+            them (``make lorr-kit`` runs it).
     """
     missing = missing_packages()
-    if not missing:
-        return
-    command = ["apt-get", "install", "-y", "--no-install-recommends", *missing]
-    if shutil.which("apt-get") is None or os.geteuid() != 0:
+    if missing:
+        command = f"sudo apt-get install -y --no-install-recommends {' '.join(missing)}"
         raise StartKitError(
-            f"the start kit needs {', '.join(missing)}; install them ({' '.join(command)})"
+            f"the start kit needs {', '.join(missing)}: install them ({command}), or run "
+            "make lorr-kit in the repository"
         )
-    log(f"installing {', '.join(missing)} with apt-get ...")
-    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
-    for attempt in (command, ["apt-get", "update"], command):
-        done = subprocess.run(attempt, capture_output=True, text=True, env=env)
-        if done.returncode == 0 and attempt is command and not missing_packages():
-            return
-    tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
-    raise StartKitError(f"apt-get could not install {', '.join(missing)}: {tail[0]}")
 
 
 def _pybind11_dir() -> str:
@@ -256,9 +248,17 @@ def _locked(path: Path) -> Iterator[None]:
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     """``python -m rtaw_marl.integrations.lorr.kit``: build the ``python`` variant if the
-    start kit is there (``make test`` runs this before the suite), else say so and pass."""
+    start kit is there (``make test`` runs this before the suite), else say so and pass.
+    ``--missing`` prints the missing Debian packages, one line, for ``make lorr-kit``."""
+    args = sys.argv[1:] if argv is None else argv
+    if args == ["--missing"]:
+        print(" ".join(missing_packages()))
+        return
+    if args:
+        print(f"error: unknown arguments {' '.join(args)}; valid: --missing", file=sys.stderr)
+        sys.exit(2)
     try:
         kit_source()
     except StartKitError as exc:
