@@ -256,4 +256,7 @@ def test_the_runner_runs_a_study_and_writes_its_page(
     assert stored is not None
     assert stored.seeds == [0, 1]
     assert not list((tmp_path / "run").glob(".*.lock"))
-    assert "results:" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "results:" in printed
+    # The printed tables are kept beside the study's result: <study>.txt.
+    assert (tmp_path / "run" / "tiny.txt").read_text() == printed

@@ -54,7 +54,7 @@ def test_two_runs_in_the_same_second_get_their_own_folders(cli) -> None:
     first = cli("eval", *QUICK, "seeds=[0]")
     second = cli("eval", *QUICK, "seeds=[0]")
     assert first.code == second.code == 0, first.err + second.err
-    paths = [r.out.split("results: ")[-1].strip() for r in (first, second)]
+    paths = [r.out.split("results: ")[-1].splitlines()[0] for r in (first, second)]
     assert paths[0] != paths[1]
     assert all(Path(p).is_file() for p in paths)
     assert f"_{os.getpid()}" in paths[0]

@@ -33,7 +33,7 @@ def test_the_printed_report_is_saved_beside_results_json(cli, tmp_path: Path) ->
     assert result.out == saved
     assert "| policy | TTD ± 95% CI |" in saved
     assert saved.startswith("layout ")
-    assert saved.endswith(f"results: {out}\n")
+    assert saved.endswith(f"results: {out}\nepisodes: {out.with_suffix('.csv')}\n")
     data = json.loads(out.read_text())
     for name in ("mpdm", "rbts"):
         (line,) = [row for row in saved.splitlines() if row.startswith(f"| {name} |")]
@@ -84,30 +84,3 @@ def test_transcript_prints_and_saves_the_same_text(tmp_path: Path) -> None:
     assert (
         report.save(tmp_path / "t.txt").read_text() == stream.getvalue() == "| a |\n|---|\ndone\n"
     )
-
-
-def test_rtaw_study_saves_its_tables_beside_its_json(cli, tmp_path: Path, monkeypatch) -> None:
-    """rtaw-study's printed tables land in ``<study>.txt`` in its run folder."""
-    from benchmarks.study import Cell, Study, rule
-    from rtaw_marl.scenarios import SCENARIOS
-
-    small = Study(
-        name="small",
-        description="a small test study",
-        cells=lambda seeds: [
-            Cell(
-                key="C, M=10",
-                scenario=SCENARIOS["C_astar_m10"].with_env(num_tasks=20),
-                policies={"MPDM": rule("mpdm")},
-                seeds=tuple(seeds),
-            )
-        ],
-        render=lambda result, _: json.dumps(result.ttd),
-    )
-    monkeypatch.setattr("benchmarks.run.find_study", lambda name: small)
-    result = cli("study", "seeds=[0,1]", f"output={tmp_path / 'st'}")
-    assert result.code == 0, result.err
-    saved = (tmp_path / "st" / "small.txt").read_text()
-    assert saved == result.out
-    stored = json.loads((tmp_path / "st" / "small.json").read_text())
-    assert json.loads(saved.splitlines()[0]) == stored["rows"]

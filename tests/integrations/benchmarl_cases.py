@@ -10,6 +10,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+pytestmark = pytest.mark.integration
+
 bm = pytest.importorskip("rtaw_marl.integrations.benchmarl", exc_type=ImportError)
 pytest.importorskip("benchmarl")
 
