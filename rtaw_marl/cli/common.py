@@ -39,7 +39,6 @@ from rtaw_marl.utils.signals import Interrupted, terminate_as_interrupt
 
 __all__ = [
     "SweepFailures",
-    "exit_on_user_error",
     "hydra_entry",
     "learned_files",
     "policies_from_cfg",
@@ -62,7 +61,7 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
     register_configs()
     register_help()
 
-    @exit_on_user_error
+    @_exit_on_user_error
     @wraps(task)
     def checked(cfg: DictConfig) -> Any:
         # Inside the job Hydra's config holds this job's own overrides (one per job of
@@ -129,7 +128,7 @@ def _print_help(config_name: str, args: list[str]) -> None:
     print(help_text(config_name, cfg), end="")
 
 
-def exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
+def _exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig], Any]:
     """Turn user errors into one ``error: ...`` line on stderr and exit status 2.
 
     An ``OSError`` that escapes the task (the file system's: a path too long, no

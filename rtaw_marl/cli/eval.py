@@ -41,7 +41,6 @@ from tqdm import tqdm
 
 from rtaw_marl.cli.common import (
     as_list,
-    exit_on_user_error,
     hydra_entry,
     learned_files,
     policies_from_cfg,
@@ -67,7 +66,6 @@ from rtaw_marl.evaluation.tidy import write_episodes_csv
 from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcript_path
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.inputs import seed_list
 from rtaw_marl.utils.runs import claim_file
 from rtaw_marl.utils.signals import Interrupted
 
@@ -75,15 +73,13 @@ from rtaw_marl.utils.signals import Interrupted
 REFERENCE = "mpdm"
 
 
-@exit_on_user_error
 def run(cfg: DictConfig | EvalConfig) -> dict:
     """Evaluate ``cfg.policy`` on ``cfg.seeds`` and write the results; returns them."""
     cfg = typed(cfg)
     names = as_list(cfg.policy)
     if not names:
         raise ConfigError("policy must name at least one policy")
-    # Distinct: a seed listed twice would count one episode twice.
-    seeds = seed_list(cfg.seeds)
+    seeds = cfg.seeds  # distinct integers >= 0: EvalConfig checked them
     output = Path(cfg.output or f"{HydraConfig.get().runtime.output_dir}/results.json")
     # Checked and held before any work, so a bad path does not cost a whole evaluation
     # and two runs never write the same results.

@@ -25,7 +25,7 @@ from typing import Any
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli.common import as_list, exit_on_user_error, hydra_entry, policy_names, typed
+from rtaw_marl.cli.common import as_list, hydra_entry, policy_names, typed
 from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.integrations.lorr.config import LORR_DEFAULT, LoRRConfig
 from rtaw_marl.integrations.lorr.entry import RunSpec
@@ -41,7 +41,6 @@ from rtaw_marl.utils.runs import check_writable_file
 _NO_OUTSIDE = {"hindsight": "hindsight needs the episode's future, which LoRR does not tell"}
 
 
-@exit_on_user_error
 def run(cfg: DictConfig | LoRRConfig) -> dict[str, LoRRRun]:
     """Build the kit, run each scheduler, print and write the results."""
     cfg = typed(cfg)

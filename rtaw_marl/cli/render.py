@@ -23,7 +23,7 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, policies_from_cfg, typed
+from rtaw_marl.cli.common import hydra_entry, policies_from_cfg, typed
 from rtaw_marl.cli.episode import note, play_checked
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import RenderConfig
@@ -32,7 +32,6 @@ from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.gif import render_gif
 
 
-@exit_on_user_error
 def run(cfg: DictConfig | RenderConfig) -> Path:
     """Play ``cfg.policy`` on seed ``cfg.seed``, check the schedule, write the GIF."""
     cfg = typed(cfg)

@@ -14,11 +14,10 @@ from pathlib import Path
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli.common import exit_on_user_error, hydra_entry, typed
+from rtaw_marl.cli.common import hydra_entry, typed
 from rtaw_marl.training.config import TrainConfig
 
 
-@exit_on_user_error
 def run(cfg: DictConfig | TrainConfig) -> None:
     """Train as configured and print where the checkpoints are."""
     cfg = typed(cfg)

@@ -23,7 +23,6 @@ from omegaconf import DictConfig
 
 from rtaw_marl.cli.common import (
     as_list,
-    exit_on_user_error,
     hydra_entry,
     policies_from_cfg,
     typed,
@@ -69,7 +68,6 @@ def _saved(cfg: ViewConfig) -> tuple[Layout, list[ViewEpisode]]:
     return layout, episodes
 
 
-@exit_on_user_error
 def run(cfg: DictConfig | ViewConfig) -> Path:
     """Play (or read) the episodes, then write the viewer."""
     cfg = typed(cfg)

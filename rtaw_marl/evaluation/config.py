@@ -65,9 +65,10 @@ class EvalConfig(SimGroups):
         if isinstance(seeds, (list, tuple)):
             if not seeds:
                 raise ConfigError("seeds must name at least one seed")
-            seed_list(seeds, "seeds")
         else:
-            seed_value(seeds, "seeds")
+            seeds = [seed_value(seeds, "seeds")]
+        # Checked here, once: the command uses the list as it is.
+        self.seeds = seed_list(seeds, "seeds")
 
 
 @dataclass(kw_only=True)
