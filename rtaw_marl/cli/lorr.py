@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
 from pathlib import Path
 from typing import Any
@@ -33,6 +34,7 @@ from rtaw_marl.integrations.lorr.kit import build_kit
 from rtaw_marl.integrations.lorr.run import LoRRRun, run_lifelong
 from rtaw_marl.policies import BASELINES
 from rtaw_marl.policies.labels import checkpoint_labels
+from rtaw_marl.policies.user import import_policy, is_import_spec
 from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.runs import check_writable_file
@@ -95,6 +97,11 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | None]:
     for name in names:
         if name in _NO_OUTSIDE:
             raise ConfigError(f"policy={name}: {_NO_OUTSIDE[name]}")
+        if is_import_spec(name):
+            # Imported here too, so a bad module or name is one line before any run.
+            label, _ = import_policy(name)
+            out[label] = RunSpec(policy=name, stats="stats.json", search_path=os.getcwd(), **common)
+            continue
         if name not in valid:
             raise unknown_name("policy", name, valid)
         if name == LORR_DEFAULT:

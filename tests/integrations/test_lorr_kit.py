@@ -175,6 +175,35 @@ def test_rtaw_lorr_cli(build: KitBuild, tmp_path: Path) -> None:
         assert len(done.stderr.strip().splitlines()) == 1
 
 
+def test_rtaw_lorr_runs_a_user_policy(build: KitBuild, tmp_path: Path) -> None:
+    """``policy=my_rules:first_queued``: the user's module, imported from the command's
+    working directory inside LoRR's own process, schedules; its label is the name."""
+    (tmp_path / "my_rules.py").write_text(
+        "import numpy as np\n\n\ndef first_queued(sim):\n"
+        "    return int(np.flatnonzero(sim.queue_mask)[0])\n"
+    )
+    out = tmp_path / "r.json"
+    done = subprocess.run(
+        [sys.executable, "-m", "rtaw_marl.cli.lorr", f"problem={RANDOM}",
+         "policy=[mpdm,my_rules:first_queued]", "timesteps=30", "plan_time_ms=30",
+         f"output={out}", f"hydra.run.dir={tmp_path}/run"],
+        capture_output=True, text=True, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    runs = json.loads(out.read_text())["runs"]
+    assert set(runs) == {"mpdm", "first_queued"}
+    assert runs["first_queued"]["schedule_errors"] == 0
+    assert runs["first_queued"]["timesteps"] == 30
+    bad = subprocess.run(
+        [sys.executable, "-m", "rtaw_marl.cli.lorr", f"problem={RANDOM}",
+         "policy=my_rules:last_queued", f"hydra.run.dir={tmp_path}/x"],
+        capture_output=True, text=True, cwd=tmp_path,
+    )  # fmt: skip
+    assert bad.returncode == 2
+    assert "my_rules has no 'last_queued'" in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1
+
+
 def test_missing_kit_and_packages_are_clear(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import time
 import traceback
 from dataclasses import asdict, dataclass, field
@@ -38,7 +39,8 @@ class RunSpec:
 
     Attributes:
         problem: The LoRR problem JSON (the mirror simulator is built on its map).
-        policy: A rule's name, or ``checkpoint`` / ``pretrained`` with ``source``.
+        policy: A rule's name, ``checkpoint`` / ``pretrained`` with ``source``, or a
+            user policy ``module:Name`` (imported from ``search_path``).
         source: The checkpoint path or shipped name of a learned policy.
         candidates: ``candidates=K`` of a learned policy.
         baselines: The rules' parameters (``BaselinesConfig`` keys).
@@ -47,6 +49,8 @@ class RunSpec:
         timesteps: LoRR's ``simulationTime``: the stats are written at the last one.
         stats: Where the scheduler writes its counts (JSON).
         seed: The policy's tie-breaking seed.
+        search_path: The folder a user policy's module is imported from (the working
+            directory of the command; LoRR's process runs elsewhere).
     """
 
     problem: str
@@ -58,6 +62,7 @@ class RunSpec:
     baselines: dict[str, Any] = field(default_factory=dict)
     share: float = 0.5
     seed: int = 0
+    search_path: str | None = None
 
     def write(self, path: Path) -> None:
         atomic_write(path, lambda fh: fh.write(json.dumps(asdict(self), indent=1).encode()))
@@ -70,6 +75,7 @@ class RunSpec:
 def build_scheduler(spec: RunSpec) -> PolicyScheduler:
     """The mirror simulator of ``spec.problem`` and the policy, ready to plan."""
     from rtaw_marl.policies import BaselinesConfig, make_baseline
+    from rtaw_marl.policies.user import import_policy, is_import_spec
     from rtaw_marl.scenarios.lorr import lorr_scenario
     from rtaw_marl.sim.builder import build_sim
 
@@ -81,6 +87,11 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler:
     sim = build_sim(
         scenario.with_env(num_tasks=m + int(scenario.env["queue_len"]), horizon=10**9).spec()
     )
+    if is_import_spec(spec.policy):
+        if spec.search_path is not None and spec.search_path not in sys.path:
+            sys.path.append(spec.search_path)
+        _, user_policy = import_policy(spec.policy)
+        return PolicyScheduler(user_policy, sim, seed=spec.seed)
     if spec.policy in ("checkpoint", "pretrained"):
         from rtaw_marl.policies.network import load_policy
 
