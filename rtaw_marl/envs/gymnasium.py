@@ -92,10 +92,11 @@ reset options), anything else raises `EnvUsageError` naming what was passed.
 ## Arguments
 
 `WarehouseEnv(layout=None, navigator=None, tasks=None, render_mode=None,
-observation="full", obs_format="flat", **env)`: as the PettingZoo env's `env(...)`
-(`**env` the `SimConfig` keys `num_robots`, `num_tasks`, `queue_len`,
-`episode_mode`, `noise_mean`, `noise_var`, `reward`, ...), only `obs_format`
-defaults to `"flat"`; an unknown key or option is a `ConfigError` listing them.
+observation="full", obs_format="flat", scenario=None, **env)`: as the PettingZoo env's
+`env(...)` (`**env` the `SimConfig` keys `num_robots`, `num_tasks`, `queue_len`,
+`episode_mode`, `noise_mean`, `noise_var`, `reward`, ...; `scenario` a named setting,
+which the groups and keys given override), only `obs_format` defaults to `"flat"`; an
+unknown key, option or scenario is a `ConfigError` listing them.
 
 ## Version History
 
@@ -118,7 +119,9 @@ from rtaw_marl.envs.pettingzoo import reset_option_keys, zero_info
 from rtaw_marl.envs.spaces import features_space
 from rtaw_marl.envs.text import render_ansi
 from rtaw_marl.errors import ConfigError, EnvUsageError, usage_error
-from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.scenarios import Scenario
+from rtaw_marl.scenarios.merge import spec_with
+from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.inputs import draw_training_seed, seed_value
 from rtaw_marl.sim.options import LayoutOption, NavigatorOption, TaskOption
@@ -143,6 +146,7 @@ class WarehouseEnv(gymnasium.Env):
         *,
         observation: str = "full",
         obs_format: str = "flat",
+        scenario: str | Scenario | None = None,
         **env: Any,
     ) -> None:
         """Build the env (module docstring, *Arguments*).
@@ -157,7 +161,7 @@ class WarehouseEnv(gymnasium.Env):
             raise ConfigError(
                 f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
             )
-        spec = SimSpec.of(env, layout, navigator, tasks)
+        spec = spec_with(scenario, env, layout, navigator, tasks)
         self.obs_layout = ObservationLayout(
             observation, obs_format, spec.env.num_robots, spec.env.queue_len
         )

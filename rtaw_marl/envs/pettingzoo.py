@@ -200,8 +200,8 @@ from rtaw_marl.errors import (
     usage_error,
 )
 from rtaw_marl.scenarios import Scenario
-from rtaw_marl.scenarios import scenario as find_scenario
-from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.scenarios.merge import spec_with
+from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.inputs import draw_training_seed, seed_value
@@ -354,13 +354,7 @@ class raw_env(AECEnv):
             raise ConfigError(
                 f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
             )
-        if scenario is not None:
-            named = scenario if isinstance(scenario, Scenario) else find_scenario(scenario)
-            layout = named.layout if layout is None else layout
-            navigator = named.navigator if navigator is None else navigator
-            tasks = named.tasks if tasks is None else tasks
-            env = {**named.env, **env}
-        spec = SimSpec.of(env, layout, navigator, tasks)
+        spec = spec_with(scenario, env, layout, navigator, tasks)
         m, n = spec.env.num_robots, spec.env.queue_len
         self.obs_layout = ObservationLayout(observation, obs_format, m, n)
         self.sim: WarehouseSim = build_sim(spec)

@@ -225,3 +225,18 @@ def test_the_old_id_still_makes_the_adapter_with_a_warning() -> None:
         env = gymnasium.make("rtaw/Warehouse-v1", num_robots=3, num_tasks=5)
     assert env.unwrapped.__class__.__name__ == "WarehouseEnv"
     assert gymnasium.make("rtaw/warehouse-single-v1", num_robots=3, num_tasks=5)
+
+
+def test_a_named_scenario_builds_as_in_the_aec_env() -> None:
+    """``scenario=`` works in the Gymnasium adapter as in the PettingZoo env: the same
+    simulator, the keys given on top."""
+    from rtaw_marl import warehouse_v1
+    from rtaw_marl.envs.gymnasium import WarehouseEnv
+
+    single = WarehouseEnv(scenario="C_astar_m10", num_tasks=40)
+    aec = warehouse_v1.env(scenario="C_astar_m10", num_tasks=40).unwrapped
+    assert single.sim.config == aec.sim.config
+    assert single.sim.layout.describe() == aec.sim.layout.describe()
+    assert single.sim.config.num_tasks == 40
+    with pytest.raises(ConfigError, match="unknown scenario 'C_astar_m1'"):
+        WarehouseEnv(scenario="C_astar_m1")
