@@ -1,7 +1,8 @@
 """The typed config spine: Hydra schemas for every option, composition and conversion.
 
 * :mod:`.store` registers each option's dataclass (defined next to the code it
-  configures) with Hydra's ConfigStore;
+  configures) with Hydra's ConfigStore, and the options made from registries
+  (``scenario=``, ``row=``: :mod:`.scenarios`; ``+zoo=``);
 * :func:`compose` composes a primary config (``eval``, ``train``, ``render``) in-process,
   as the command line would;
 * :func:`to_typed` turns a composed config into its dataclass, with one-line errors.
@@ -22,7 +23,7 @@ try:
         config_error,
         to_typed,
     )
-    from rtaw_marl.config.store import GROUPS, register_configs
+    from rtaw_marl.config.store import GROUPS, group_options, register_configs
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "cli") from None
 
@@ -33,6 +34,7 @@ __all__ = [
     "check_overrides",
     "compose",
     "config_error",
+    "group_options",
     "register_configs",
     "to_typed",
 ]

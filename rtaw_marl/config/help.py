@@ -31,7 +31,7 @@ from hydra.core.global_hydra import GlobalHydra
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from rtaw_marl.config.reference import attribute_docs
-from rtaw_marl.config.store import CONF_DIR
+from rtaw_marl.config.store import CONF_DIR, group_options
 
 __all__ = ["APPENDABLE", "GROUP_DOCS", "app_groups", "help_text", "register_help"]
 
@@ -135,12 +135,12 @@ def _group_line(group: str, choice: str | None) -> str:
 
 def _options(group: str) -> list[str]:
     """The group's options on the config search path (``hydra.searchpath`` additions
-    too) when Hydra is running, else the packaged ones."""
+    too) when Hydra is running, else the packaged and stored ones."""
     if GlobalHydra.instance().is_initialized():
         loader = GlobalHydra.instance().config_loader()
         options = loader.get_group_options(group)
     else:
-        options = sorted(p.stem for p in (CONF_DIR / group).glob("*.yaml"))
+        options = group_options(group)
     return [o for o in options if not o.startswith("_")]
 
 

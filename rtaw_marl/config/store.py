@@ -5,6 +5,10 @@ defaults list (``- /schema/layout/shelves@_here_``) and adds only what differs (
 preset of ``layout=A``, the zero noise of ``navigator=sipp``). The schemas make
 composition typed: an unknown key or a value of the wrong type fails when Hydra composes
 the config, and :func:`rtaw_marl.config.to_typed` turns the result into dataclasses.
+
+Options made from a registry are stored here too, with no YAML file: ``scenario=NAME``
+and ``row=NAME`` (:mod:`rtaw_marl.config.scenarios`) and ``+zoo=NAME`` (the shipped
+policies' recipes).
 """
 
 from __future__ import annotations
@@ -16,8 +20,10 @@ from typing import Any
 
 import yaml
 from hydra.core.config_store import ConfigStore
+from hydra.core.object_type import ObjectType
 from omegaconf import DictConfig, OmegaConf
 
+from rtaw_marl.config.scenarios import register_scenarios
 from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, ViewConfig
 from rtaw_marl.integrations.lorr.config import LoRRConfig
 from rtaw_marl.models.config import MODELS
@@ -28,7 +34,7 @@ from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
 from rtaw_marl.training.loggers.config import LOGGER_OPTIONS
 from rtaw_marl.training.zoo import ZOO
 
-__all__ = ["CONF_DIR", "GROUPS", "register_configs"]
+__all__ = ["CONF_DIR", "GROUPS", "group_options", "register_configs"]
 
 #: The packaged Hydra config folder (``rtaw_marl/conf``).
 CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
@@ -79,6 +85,8 @@ def register_configs() -> None:
             store.store(group=f"schema/{group}", name=name, node=_node(schema))
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
+    # scenario=NAME and row=NAME: the scenario registry's entries (config.scenarios).
+    register_scenarios(store)
     # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes
     # (rtaw_marl.training.zoo) as one sweep. Continued entries are left out: they resume
     # a copy of their base's run folder.
@@ -86,6 +94,18 @@ def register_configs() -> None:
         node = _zoo_node(recipe.overrides())
         store.store(group="zoo", name=recipe.name, node=node, package="_global_")
     _registered = True
+
+
+def group_options(group: str) -> list[str]:
+    """The options of config group ``group``, sorted: its packaged YAML files and the
+    options stored from registries (``scenario``, ``row``, ``zoo``); empty for a group
+    that does not exist."""
+    register_configs()
+    options = {p.stem for p in (CONF_DIR / group).glob("*.yaml")}
+    store = ConfigStore.instance()
+    if store.get_type(group) is ObjectType.GROUP:
+        options |= {name.removesuffix(".yaml") for name in store.list(group)}
+    return sorted(options)
 
 
 def _zoo_node(overrides: list[str]) -> dict[str, Any]:

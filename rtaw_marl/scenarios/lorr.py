@@ -1,6 +1,7 @@
 """League of Robot Runners 2024 problems as scenarios: ``lorr_scenario(path)`` in Python,
-``scenario=lorr tasks.problem=PATH`` on the command line (``conf/scenario/lorr.yaml``,
-generated here).
+``scenario=lorr tasks.problem=PATH`` on the command line (the ``scenario`` option
+:func:`rtaw_marl.config.scenarios.lorr_node`, whose keys the ``${lorr:...}`` resolver,
+:func:`lorr_value`, derives from the problem).
 
 Both take the problem's map, tasks and start cells, LoRR's reveal window as the queue
 (``env.queue_len = ceil(numTasksReveal x M)``, ``env.refill=finish``), LoRR's
@@ -19,11 +20,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.scenarios.registry import Scenario
 from rtaw_marl.sim.lorr import LORR_ENV, LoRRProblem, lorr_env, read_problem
 
-__all__ = ["lorr_scenario", "lorr_value", "lorr_yaml"]
-
-_GENERATED = (
-    "# Generated from rtaw_marl.scenarios (python -m rtaw_marl.scenarios.configs); do not edit."
-)
+__all__ = ["lorr_scenario", "lorr_value"]
 
 
 def lorr_scenario(
@@ -68,34 +65,3 @@ def lorr_value(
     robots = None if num_robots is None else int(num_robots)
     t = LORR_ENV["horizon"] if horizon is None else int(horizon)
     return int(lorr_env(read_problem(problem), robots, t)[key])
-
-
-def lorr_yaml() -> str:
-    """The text of ``conf/scenario/lorr.yaml``."""
-    env = {
-        "num_robots": "${lorr:num_robots,${tasks.problem}}",
-        "queue_len": "${lorr:queue_len,${tasks.problem},${env.num_robots}}",
-        "num_tasks": "${lorr:num_tasks,${tasks.problem},${env.num_robots},${env.horizon}}",
-        **LORR_ENV,
-    }
-    lines = [
-        "# @package _global_",
-        "# A League of Robot Runners 2024 problem: set tasks.problem=FILE.json (its map,",
-        "# tasks, start cells and reveal window; PIBT execution for 5,000 timesteps).",
-        _GENERATED,
-        "defaults:",
-        "  - override /layout: lorr",
-        "  - override /navigator: pibt",
-        "  - override /tasks: lorr",
-        "",
-        "env:",
-        *(f"  {k}: {_quoted(v)}" for k, v in env.items()),
-        "",
-        "layout:",
-        '  problem: "${tasks.problem}"',
-    ]
-    return "\n".join(lines) + "\n"
-
-
-def _quoted(value: object) -> str:
-    return f'"{value}"' if isinstance(value, str) and value.startswith("$") else str(value)

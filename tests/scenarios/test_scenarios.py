@@ -1,27 +1,56 @@
-"""One source per setting: the scenario registry, its generated YAML twins, and the
-same simulator from every way of naming it."""
+"""One source per setting: the scenario registry, its ``scenario=`` and ``row=`` options
+in Hydra's ConfigStore, and the same simulator from every way of naming it."""
 
 from __future__ import annotations
 
 import pytest
+from hydra.core.config_store import ConfigStore
+from omegaconf import OmegaConf
 
-from rtaw_marl.config import CONF_DIR, compose, to_typed
+from rtaw_marl.config import CONF_DIR, compose, group_options, to_typed
+from rtaw_marl.config.scenarios import LORR, lorr_node, row_node, scenario_node
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.pretrained.registry import PRETRAINED
 from rtaw_marl.scenarios import EVAL_SEEDS, ROWS, SCENARIOS, scenario
-from rtaw_marl.scenarios.configs import expected_files
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
 pytestmark = pytest.mark.integration
 
 
-def test_generated_configs_match_the_registry() -> None:
-    """conf/scenario and conf/row hold exactly the registry's files, as generated."""
-    files = expected_files()
-    on_disk = {*(CONF_DIR / "scenario").glob("*.yaml"), *(CONF_DIR / "row").glob("*.yaml")}
-    assert on_disk == set(files), "run: python -m rtaw_marl.scenarios.configs"
-    stale = [p.name for p, text in files.items() if p.read_text() != text]
-    assert not stale, f"stale (run python -m rtaw_marl.scenarios.configs): {stale}"
+def _stored(group: str, name: str) -> dict:
+    node = ConfigStore.instance().load(f"{group}/{name}.yaml")
+    assert node.package == "_global_"
+    return OmegaConf.to_container(node.node, resolve=False)  # type: ignore[return-value]
+
+
+def test_scenario_and_row_options_are_the_registry() -> None:
+    """``scenario=`` and ``row=`` offer exactly the registry's names, each stored as its
+    entry's node, and no YAML file shadows them."""
+    assert group_options("scenario") == sorted([*SCENARIOS, LORR])
+    assert group_options("row") == sorted(ROWS)
+    for name, s in SCENARIOS.items():
+        assert _stored("scenario", name) == scenario_node(s)
+    assert _stored("scenario", LORR) == lorr_node()
+    for row in ROWS:
+        assert _stored("row", row) == row_node(row)
+    assert not [*CONF_DIR.glob("scenario/*.yaml"), *CONF_DIR.glob("row/*.yaml")]
+
+
+def test_a_scenario_node_chooses_its_options_and_sets_its_keys() -> None:
+    assert scenario_node(SCENARIOS["default"]) == {}
+    assert scenario_node(SCENARIOS["C256_astar_m1000_random"]) == {
+        "defaults": [
+            {"override /layout": "C"},
+            {"override /navigator": "astar"},
+            {"override /tasks": "random"},
+        ],
+        "env": {"num_robots": 1000, "num_tasks": 5000, "episode_mode": "paper"},
+        "layout": {"width": 256, "height": 256},
+    }
+    assert row_node("A_m100") == {
+        "defaults": [{"override /scenario": "A_astar_m100"}],
+        "pretrained": ["A_astar_m100_long_plus", "A_astar_m100_long"],
+    }
 
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
@@ -53,7 +82,7 @@ def test_evaluation_seeds_are_not_selection_seeds() -> None:
     assert all(max(s.seeds) < 1000 for s in SCENARIOS.values())
 
 
-@pytest.mark.parametrize("option", sorted(p.stem for p in (CONF_DIR / "layout").glob("*.yaml")))
+@pytest.mark.parametrize("option", group_options("layout"))
 def test_layout_names_mean_the_same_in_python(option: str) -> None:
     """``layout=C`` and ``SimSpec.of(layout="C")`` are the same layout (``file`` needs a path)."""
     overrides = [f"layout={option}"] + (["layout.path=maps/x.map"] if option == "file" else [])
@@ -62,7 +91,7 @@ def test_layout_names_mean_the_same_in_python(option: str) -> None:
     assert python == hydra
 
 
-@pytest.mark.parametrize("option", sorted(p.stem for p in (CONF_DIR / "navigator").glob("*.yaml")))
+@pytest.mark.parametrize("option", group_options("navigator"))
 def test_navigator_names_mean_the_same_in_python(option: str) -> None:
     """``navigator=sipp`` turns the noise off on the command line and in Python alike."""
     hydra = to_typed(compose(config_name="eval", overrides=[f"navigator={option}"])).sim_spec()

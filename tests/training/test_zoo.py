@@ -13,7 +13,8 @@ import torch
 from rtaw_marl.config import as_plain, compose, to_typed
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint
-from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
+from rtaw_marl.policies.pretrained.recipes import RECIPES
+from rtaw_marl.policies.pretrained.registry import PRETRAINED, SHIPPED, pretrained_path
 from rtaw_marl.scenarios import SCENARIOS
 from rtaw_marl.training.checkpoints import scenario_changes
 from rtaw_marl.training.zoo import (
@@ -22,6 +23,7 @@ from rtaw_marl.training.zoo import (
     LONG_FRAMES,
     STAGES,
     ZOO,
+    Recipe,
     recipe,
     train_command,
 )
@@ -31,19 +33,26 @@ pytestmark = pytest.mark.integration
 STAGED = sorted(n for n, r in ZOO.items() if r.stage != "train")
 
 
-def test_the_zoo_is_every_shipped_name_and_names_real_scenarios() -> None:
-    assert list(ZOO) == list(PRETRAINED)
-    for name, entry in ZOO.items():
+def test_the_recipe_table_is_every_shipped_policy_and_names_real_scenarios() -> None:
+    """One table: its names are the shipped ones (each a ``.pt`` beside it), the zoo's
+    entries are its rows, and every row is a recipe that can run."""
+    assert tuple(RECIPES) == PRETRAINED
+    assert {p.stem for p in SHIPPED.glob("*.pt")} == set(RECIPES)
+    assert list(ZOO) == list(RECIPES)
+    for name, entry in RECIPES.items():
+        assert ZOO[name] == Recipe.of(entry)
         assert entry.name == name
         assert entry.scenario in SCENARIOS
         assert entry.stage in STAGES
         assert entry.model == ("rtaw_plus" if name.endswith("_plus") else "rtaw")
         assert (entry.base is None) == (entry.stage == "train")
+        if entry.base is not None:  # continues an entry listed before it
+            assert list(RECIPES).index(entry.base) < list(RECIPES).index(name)
         if entry.stage == "generalist":  # continues a shipped specialist's actor
-            assert ZOO[entry.base].stage != "generalist"
+            assert RECIPES[entry.base].stage != "generalist"
             assert entry.mix
         else:
-            assert entry.base is None or ZOO[entry.base].stage == "train"
+            assert entry.base is None or RECIPES[entry.base].stage == "train"
     with pytest.raises(ConfigError, match="available: A_astar_m10"):
         recipe("nope")
 
