@@ -2,13 +2,14 @@
 
 The YAML files in ``rtaw_marl/conf/`` are thin twins: each names its schema in its
 defaults list (``- /schema/layout/shelves@_here_``) and adds only what differs (the
-preset of ``layout=A``, the zero noise of ``navigator=sipp``). The schemas make
+preset of ``layout=A``). The schemas make
 composition typed: an unknown key or a value of the wrong type fails when Hydra composes
 the config, and :func:`rtaw_marl.config.to_typed` turns the result into dataclasses.
 
-Options made from a registry are stored here too, with no YAML file: ``scenario=NAME``
-and ``row=NAME`` (:mod:`rtaw_marl.config.scenarios`) and ``+zoo=NAME`` (the shipped
-policies' recipes).
+Options made from a registry are stored here too, with no YAML file: the navigators
+that change simulator keys (``navigator=sipp`` turns the completion noise off, from
+``SIPPConfig.env_defaults``), ``scenario=NAME`` and ``row=NAME``
+(:mod:`rtaw_marl.config.scenarios`) and ``+zoo=NAME`` (the shipped policies' recipes).
 """
 
 from __future__ import annotations
@@ -85,6 +86,12 @@ def register_configs() -> None:
             store.store(group=f"schema/{group}", name=name, node=_node(schema))
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
+    # navigator=sipp|cbs|pibt: also the simulator keys the option changes (the completion
+    # noise off), from the option's own env_defaults: one place for that rule.
+    for name, option in NAVIGATORS.items():
+        if option.env_defaults:
+            store.store(group="navigator", name=name, node=_navigator_node(name, option),
+                        package="_global_")  # fmt: skip
     # scenario=NAME and row=NAME: the scenario registry's entries (config.scenarios).
     register_scenarios(store)
     # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes
@@ -106,6 +113,16 @@ def group_options(group: str) -> list[str]:
     if store.get_type(group) is ObjectType.GROUP:
         options |= {name.removesuffix(".yaml") for name in store.list(group)}
     return sorted(options)
+
+
+def _navigator_node(name: str, option: type) -> dict[str, Any]:
+    """``navigator=NAME`` for an option that changes simulator keys: its schema as the
+    ``navigator`` group, and those keys (:attr:`NavigatorOption.env_defaults`) in ``env``,
+    under the user's own overrides."""
+    return {
+        "defaults": [f"/schema/navigator/{name}@navigator", "_self_"],
+        "env": dict(option.env_defaults),
+    }
 
 
 def _zoo_node(overrides: list[str]) -> dict[str, Any]:

@@ -238,3 +238,22 @@ def test_user_config_folder_adds_options(cli, tmp_path: Path) -> None:
     result = cli("eval", f"hydra.searchpath=[file://{conf.parent}]", "layout=typo")
     assert result.code == 2
     assert "widht" in result.err
+
+
+@pytest.mark.parametrize("name", ["sipp", "cbs", "pibt"])
+def test_a_navigator_sets_the_simulator_keys_its_option_names(name: str) -> None:
+    """``navigator=sipp`` (a stored node, no YAML) sets exactly the option's
+    ``env_defaults``, which ``SimSpec.of(navigator=...)`` applies too; a key the user
+    gives still wins."""
+    from rtaw_marl.config import compose
+    from rtaw_marl.sim.builder import SimSpec
+    from rtaw_marl.sim.options import NAVIGATORS
+
+    defaults = dict(NAVIGATORS[name].env_defaults)
+    assert defaults == {"noise_mean": 0.0, "noise_var": 0.0}
+    cfg = compose(config_name="eval", overrides=[f"navigator={name}"])
+    assert {k: cfg.env[k] for k in defaults} == defaults
+    spec = SimSpec.of(navigator=name)
+    assert {k: getattr(spec.env, k) for k in defaults} == defaults
+    given = compose(config_name="eval", overrides=[f"navigator={name}", "env.noise_mean=3.0"])
+    assert given.env.noise_mean == 3.0
