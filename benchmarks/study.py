@@ -70,10 +70,10 @@ class PolicyRef:
     params: tuple[tuple[str, Any], ...] = ()
 
     def build(self, sim: Any, label: str) -> SimPolicy:
-        """The policy, acting on ``sim``'s navigator and scale (rules) or loaded."""
+        """The policy: a rule bound to ``sim`` (its navigator, scale and noise), or loaded."""
         if self.kind == "rule":
             params = BaselinesConfig(**dict(self.params))
-            return make_baseline(self.name, sim.navigator, sim.layout.scale, params)
+            return make_baseline(self.name, env=sim, params=params)
         from rtaw_marl.policies.network import load_policy  # torch: only when needed
 
         return load_policy(self.path(), name=label)

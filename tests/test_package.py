@@ -19,6 +19,7 @@ import pytest
 import rtaw_marl
 from rtaw_marl.errors import EXTRAS, MissingExtraError, extra_modules, missing_extra
 from rtaw_marl.utils.commands import NEEDS, SUMMARIES
+from tests.test_install_light import BLOCK
 
 pytestmark = pytest.mark.unit
 
@@ -150,20 +151,8 @@ def test_python_m_loads_nothing_heavy() -> None:
     assert proc.stdout.splitlines()[-1] == "[]"
 
 
-#: Makes the modules of ``BLOCKED`` unimportable, as on an install without their extras
-#: (an import raises ModuleNotFoundError). Not ``sys.modules[name] = None``: scipy's
-#: array-API helpers then read ``sys.modules["torch"].Tensor``.
-_BLOCK = """
-import importlib.abc, json, sys
-
-class _Block(importlib.abc.MetaPathFinder):
-    def find_spec(self, name, path=None, target=None):
-        if name.partition(".")[0] in BLOCKED:
-            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
-        return None
-
-sys.meta_path.insert(0, _Block())
-"""
+#: Makes the modules of ``BLOCKED`` unimportable (the env-only install's test has it).
+_BLOCK = "import json\n" + BLOCK
 
 PACKAGE = ROOT / "rtaw_marl"
 #: Every module an extra installs (all extras).

@@ -59,12 +59,12 @@ class Probe:
     generators are separate from any policy driving the simulator.
 
     Args:
-        sim: The simulator (for its navigator and layout scale).
+        sim: The simulator the rules are bound to (its navigator, scale and noise).
     """
 
     def __init__(self, sim: WarehouseSim) -> None:
-        self.mpdm = make_baseline("mpdm", sim.navigator, sim.layout.scale)
-        self.lookahead = make_baseline(LOOKAHEAD, sim.navigator, sim.layout.scale)
+        self.mpdm = make_baseline("mpdm", env=sim)
+        self.lookahead = make_baseline(LOOKAHEAD, env=sim)
         self.horizon: int = self.lookahead.horizon
 
     def reset(self, seed: int) -> None:

@@ -61,11 +61,9 @@ def main() -> None:
     print("|---|---|" + "---|" * (4 + len(horizons)))
     for m, n in settings:
         sim = _sim(m, n, decisions)
-        rules = {name: make_baseline(name, sim.navigator) for name in ("mpdm", "rbts", "hungarian")}
+        rules = {name: make_baseline(name) for name in ("mpdm", "rbts", "hungarian")}
         for h in horizons:
-            rules[f"H{h}"] = make_baseline(
-                "lookahead", sim.navigator, params=BaselinesConfig(lookahead_horizon=h)
-            )
+            rules[f"H{h}"] = make_baseline("lookahead", params=BaselinesConfig(lookahead_horizon=h))
         if m <= 100:
             rules["hindsight"] = make_baseline("hindsight")
         per_decision_ms(sim, rules, 1)  # warm-up: distance fields, numba

@@ -189,8 +189,8 @@ def rtaw_eval_policies(env_keys: dict, cfg: dict) -> dict[str, dict[str, list[fl
     """MPDM, lookahead and RTAW+ on the bare simulator, as ``rtaw-eval`` runs them."""
     sim = build_sim(SimSpec.of(env_keys, cfg["layout"], cfg["navigator"], cfg["tasks"]))
     policies = {
-        "mpdm": make_baseline("mpdm", sim.navigator, sim.layout.scale),
-        "lookahead": make_baseline("lookahead", sim.navigator, sim.layout.scale),
+        "mpdm": make_baseline("mpdm"),
+        "lookahead": make_baseline("lookahead"),
         "rtaw+": load_policy(pretrained_path(RTAW_PLUS), name="rtaw+"),
     }
     return evaluate(sim, policies, EVAL_SEEDS)

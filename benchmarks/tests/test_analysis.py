@@ -34,7 +34,7 @@ def sim():
 
 
 def summary(sim, rule_name: str) -> Summary:
-    policy = make_baseline(rule_name, sim.navigator, sim.layout.scale)
+    policy = make_baseline(rule_name)
     decisions, ttds = play(sim, policy, [0])
     return summarise(
         decisions, ttds, ttds[0], row="tiny", short="tiny", name=rule_name, policy=rule_name

@@ -47,7 +47,7 @@ def _study(policies: dict | None = None) -> Study:
 def test_a_study_runs_what_evaluate_runs(tmp_path: Path) -> None:
     result = run_study(_study(), [0, 1], tmp_path)
     sim = build_sim(SMALL.spec())
-    direct = evaluate(sim, {"MPDM": make_baseline("mpdm", sim.navigator, sim.layout.scale)}, [0, 1])
+    direct = evaluate(sim, {"MPDM": make_baseline("mpdm")}, [0, 1])
     assert result.ttd["C, M=10"]["MPDM"] == direct["MPDM"]["ttd"]
     assert list(result.ttd["C, M=10"]) == ["MPDM", "lookahead"]
     assert (tmp_path / "C_M_10.episodes.jsonl").is_file()

@@ -229,9 +229,7 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
             label, policy = import_policy(name)
             _add(policies, label, policy)
         elif name not in sources:
-            policies[name] = make_baseline(
-                name, navigator=sim.navigator, scale=sim.layout.scale, params=cfg.baselines
-            )
+            policies[name] = make_baseline(name, env=sim, params=cfg.baselines)
         else:
             try:
                 from rtaw_marl.policies.network import load_policy

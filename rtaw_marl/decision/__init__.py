@@ -16,9 +16,14 @@ gets the same arrays, bit for bit, by one of two routes:
   agent's view, in an :class:`ObservationLayout`: ``full`` or ``compact``, ``dict`` or
   ``flat``), and a policy reads its features back with :func:`read_features`.
 
+The hand-written rules decide from one :class:`RuleInput` (what the observation holds,
+plus the navigator), built from the simulator or from an observation, so that each rule
+is written once.
+
 Modules: :mod:`~rtaw_marl.decision.features` (the one observation builder, with the
-compiled rival kernels of ``_rivals``) and :mod:`~rtaw_marl.decision.observations`
-(observation layouts, every agent's view, the global state :func:`state_vector`).
+compiled rival kernels of ``_rivals``), :mod:`~rtaw_marl.decision.observations`
+(observation layouts, every agent's view, the global state :func:`state_vector`) and
+:mod:`~rtaw_marl.decision.rule_input` (the rules' input and its two builders).
 This package needs NumPy and Numba only: it sits below the env adapters (which add the
 Gymnasium spaces, :mod:`rtaw_marl.envs.spaces`), the models and the policies.
 """
@@ -60,6 +65,7 @@ from rtaw_marl.decision.observations import (
     read_features,
     state_vector,
 )
+from rtaw_marl.decision.rule_input import RULE_NEEDS, RuleInput, acting_row, free_times
 
 __all__ = [
     "ALL_KEYS",
@@ -77,16 +83,20 @@ __all__ = [
     "RELATION_FEATURES",
     "RIVAL_FEATURES",
     "ROBOT_FEATURES",
+    "RULE_NEEDS",
     "SOFTMIN_TEMPERATURE",
     "TASK_FEATURES",
     "AgentViews",
     "Decision",
     "Features",
     "ObservationLayout",
+    "RuleInput",
+    "acting_row",
     "candidate_slots",
     "decision_features",
     "feature_shapes",
     "fleet_features",
+    "free_times",
     "nearest_other",
     "read_features",
     "relational_features",

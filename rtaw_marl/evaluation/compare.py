@@ -131,9 +131,7 @@ def compare(
     sim = build_sim(_spec(setting))
     policies = {name: played}
     for rule in rules:
-        policies[rule] = make_baseline(
-            rule, navigator=sim.navigator, scale=sim.layout.scale, params=params
-        )
+        policies[rule] = make_baseline(rule, params=params)
     results = evaluate(sim, policies, seeds)
     diffs = {
         rule: paired_difference(results[rule]["ttd"], results[name]["ttd"], confidence)

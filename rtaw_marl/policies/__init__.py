@@ -12,14 +12,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from rtaw_marl.errors import ConfigError, missing_extra, unknown_name
+from rtaw_marl.errors import missing_extra, unknown_name
 from rtaw_marl.policies.base import Policy, simulator_of
 from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, RandomPolicy
 from rtaw_marl.policies.batch import BatchAssignment
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.policies.hindsight import Hindsight
 from rtaw_marl.policies.lookahead import Hungarian, Lookahead
-from rtaw_marl.sim.distances import DistanceModel
 
 if TYPE_CHECKING:
     from rtaw_marl.policies.network import NetworkPolicy, load_policy
@@ -41,26 +40,22 @@ __all__ = [
     "make_baseline",
 ]
 
-_Factory = Callable[[DistanceModel | None, float, BaselinesConfig], "BaselinePolicy | Hindsight"]
+_Factory = Callable[[BaselinesConfig], "BaselinePolicy | Hindsight"]
 
-#: Every rule evaluated by name (``rtaw-eval policy=[...]``).
+#: Every rule evaluated by name (``rtaw-eval policy=[...]``): its parameters -> the rule,
+#: not yet bound to an env (:func:`make_baseline` binds it).
 BASELINES: dict[str, _Factory] = {
-    MPDM.name: lambda nav, scale, _: MPDM(nav, scale),
-    RBTS.name: lambda nav, scale, _: RBTS(nav, scale),
-    RandomPolicy.name: lambda nav, scale, _: RandomPolicy(nav, scale),
-    Lookahead.name: lambda nav, scale, p: Lookahead(
-        nav, scale, horizon=p.lookahead_horizon, candidates=p.lookahead_candidates
+    MPDM.name: lambda _: MPDM(),
+    RBTS.name: lambda _: RBTS(),
+    RandomPolicy.name: lambda _: RandomPolicy(),
+    Lookahead.name: lambda p: Lookahead(
+        horizon=p.lookahead_horizon, candidates=p.lookahead_candidates
     ),
-    Hungarian.name: lambda nav, scale, _: Hungarian(nav, scale),
-    BatchAssignment.name: lambda nav, scale, p: BatchAssignment(
-        nav,
-        scale,
-        region=p.batch_region,
-        cap=p.batch_cap,
-        penalty=p.batch_penalty,
-        max_batch=p.batch_max,
+    Hungarian.name: lambda _: Hungarian(),
+    BatchAssignment.name: lambda p: BatchAssignment(
+        region=p.batch_region, cap=p.batch_cap, penalty=p.batch_penalty, max_batch=p.batch_max
     ),
-    Hindsight.name: lambda nav, scale, p: Hindsight(p.hindsight_horizon),
+    Hindsight.name: lambda p: Hindsight(p.hindsight_horizon),
 }
 
 #: Names served lazily from :mod:`.network` (torch).
@@ -68,41 +63,37 @@ _NETWORK = ("NetworkPolicy", "load_policy")
 
 
 def make_baseline(
-    name: str,
-    navigator: DistanceModel | None = None,
-    scale: float = 1.0,
-    params: BaselinesConfig | None = None,
-    *,
-    env: Any = None,
+    name: str, *, env: Any = None, params: BaselinesConfig | None = None
 ) -> BaselinePolicy | Hindsight:
     """Build the rule registered as ``name``.
+
+    ``make_baseline(name)`` is all evaluation needs: ``act_sim(sim)`` takes the
+    navigator, the scale and the completion noise's mean from the simulator it is
+    given. ``make_baseline(name, env=env)`` also lets the rule act on ``env``'s
+    observations, ``act(obs)``, choosing what ``act_sim`` would.
 
     Args:
         name: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``, ``batch``
             or ``hindsight``.
-        navigator: The env's navigator (needed by rules acting on observations).
-        scale: The observation length scale.
-        params: Rule parameters (horizons); the defaults when ``None``.
-        env: A PettingZoo or Gymnasium warehouse env (or its ``WarehouseSim``): the rule
-            takes its navigator, scale and completion noise (``BaselinePolicy.bind``), so
-            that ``act(obs)`` on its observations is exactly ``act_sim``. Instead of
-            ``navigator`` and ``scale``.
+        env: A PettingZoo or Gymnasium warehouse env (wrapped or not) or its
+            ``WarehouseSim``: the rule takes its navigator, scale and completion noise's
+            mean (:meth:`BaselinePolicy.bind`); ``None``: a rule for ``act_sim``.
+        params: Rule parameters (horizons, candidates, batch sizes); the defaults when
+            ``None``.
 
     Raises:
-        ConfigError: Unknown name (the message lists the available ones), or ``env``
-            given together with ``navigator``.
+        ConfigError: Unknown name (the message lists the available ones).
+        TypeError: ``env`` is not a warehouse env or simulator.
     """
     try:
         factory = BASELINES[name]
     except KeyError:
         raise unknown_name("policy", name, list(BASELINES)) from None
-    if env is None:
-        return factory(navigator, scale, params or BaselinesConfig())
-    if navigator is not None:
-        raise ConfigError("make_baseline: give env or navigator/scale, not both")
-    sim = simulator_of(env)
-    policy = factory(sim.navigator, sim.layout.scale, params or BaselinesConfig())
-    return policy.bind(sim) if isinstance(policy, BaselinePolicy) else policy
+    sim = None if env is None else simulator_of(env)
+    policy = factory(params or BaselinesConfig())
+    if sim is not None and isinstance(policy, BaselinePolicy):
+        policy.bind(sim)
+    return policy
 
 
 def __getattr__(name: str) -> Any:

@@ -7,10 +7,16 @@ same slot for the same state:
   features, "action_mask": [N]}`` (``observe`` / ``last()``; dict or flat features);
 * ``act_sim(sim)``: the fast path on the bare simulator, used by evaluation.
 
-Rules that need more than the observation (the navigator to measure distances, the
-scale, the completion noise's mean) take it from the env when built with
-``make_baseline(name, env=env)``. The ``hindsight`` reference needs the episode's future,
-which no observation holds: its ``act`` raises ``NotImplementedError``.
+A hand-written rule is written once, as ``decide`` on one
+:class:`~rtaw_marl.decision.rule_input.RuleInput`; ``act_sim`` and ``act`` only build
+that input, from the simulator or from the observation
+(:class:`~rtaw_marl.policies.baselines.BaselinePolicy`). Rules that need more than the
+observation (the navigator to measure distances, the scale, the completion noise's
+mean) take it from the env when built with ``make_baseline(name, env=env)``; on
+``act_sim`` the simulator gives it. The ``batch`` rule and the ``hindsight`` reference
+need what no observation holds (the pickups robots are heading to; the episode's
+future): they act on the simulator only, and their ``act`` raises
+``NotImplementedError``.
 """
 
 from __future__ import annotations

@@ -1,14 +1,17 @@
 """Classical allocation rules: MPDM, RBTS and uniform random.
 
-Each rule is a :class:`~rtaw_marl.policies.base.Policy`: it acts either on the simulator
-directly (:meth:`BaselinePolicy.act_sim`, the fast path used by evaluation) or on a
-PettingZoo observation (:meth:`act`: the ``{"observation": features, "action_mask":
-mask}`` of ``warehouse_v1``, dict or flat; RBTS needs ``observation="full"``), and
-both paths choose the same task for the same state once the rule is bound to the env
-(:meth:`BaselinePolicy.bind`, or ``make_baseline(name, env=env)``), which gives it the
-navigator, the scale and the completion noise's mean. Ties (within a relative 1e-6) are broken
-uniformly at random with the policy's own generator, seeded by :meth:`reset`: in the
-paper's two-task setting MPDM faces two equally close pickups and picks at random.
+Each rule is a :class:`~rtaw_marl.policies.base.Policy` written once, as
+:meth:`BaselinePolicy.decide` on a :class:`~rtaw_marl.decision.rule_input.RuleInput`
+(what the free robot's observation holds, plus the navigator). Its two paths only build
+that input: :meth:`BaselinePolicy.act_sim` from the simulator (the fast path used by
+evaluation) and :meth:`BaselinePolicy.act` from a PettingZoo observation (the
+``{"observation": features, "action_mask": mask}`` of ``warehouse_v1``, dict or flat;
+RBTS needs ``observation="full"``). So both choose the same task for the same state,
+once the rule knows the env's navigator, scale and completion noise's mean
+(``make_baseline(name, env=env)``, or :meth:`BaselinePolicy.bind`), which ``act``
+needs. Ties (within a relative 1e-6) are broken uniformly at random with the policy's
+own generator, seeded by :meth:`~BaselinePolicy.reset`: in the paper's two-task setting
+MPDM faces two equally close pickups and picks at random.
 
 ``mpdm``
     Myopic pickup distance minimisation: the task whose origin is closest to the free
@@ -30,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from rtaw_marl.decision.observations import read_features
-from rtaw_marl.errors import ConfigError
+# free_times is re-exported: its home is now the rules' input, next to its two builders.
+from rtaw_marl.decision.rule_input import RuleInput, free_times
 from rtaw_marl.policies.base import simulator_of
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.distances import DistanceModel
@@ -41,31 +44,26 @@ __all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy", "free_times"]
 _TIE_RTOL = 1e-6
 
 
-def free_times(column: np.ndarray, scale: float) -> np.ndarray:
-    """``float64 [M]`` times until free from the observed ``time_until_free / L`` column.
-
-    The observation is float32: where a time to the millisecond is what the observation
-    holds (it rounds to the same float32), that time is taken, so that robots freed at
-    the same second still tie (and the lowest id goes first) as in the simulator; other
-    times (with completion noise) keep the observation's own value.
-    """
-    column = np.asarray(column, dtype=np.float32)
-    times = column.astype(np.float64) * scale
-    rounded = np.round(times, 3)
-    return np.where((rounded / scale).astype(np.float32) == column, rounded, times)
-
-
 class BaselinePolicy(ABC):
-    """A rule that picks a queue slot for the free robot.
+    """A rule that picks a queue slot for the free robot: :meth:`decide` on a
+    :class:`~rtaw_marl.decision.rule_input.RuleInput`, built by :meth:`act_sim` or
+    :meth:`act`.
 
     Args:
-        navigator: Needed by rules that measure distances beyond the observation
-            (RBTS on the observation path); ``None`` otherwise.
+        navigator: The env's distance model, for :meth:`act` when a rule measures
+            distances beyond the observation (RBTS, lookahead, hungarian); ``None``
+            otherwise. :meth:`act_sim` uses the simulator's.
         scale: Length scale of the observation (``Layout.scale``), to turn observed
-            coordinates back into cells.
+            coordinates back into cells on :meth:`act`.
+
+    Attributes:
+        needs: The input fields :meth:`decide` reads
+            (:data:`~rtaw_marl.decision.rule_input.RULE_NEEDS`); the builders compute
+            only these.
     """
 
     name: str = ""
+    needs: frozenset[str] = frozenset()
 
     def __init__(self, navigator: DistanceModel | None = None, scale: float = 1.0) -> None:
         self.navigator = navigator
@@ -91,13 +89,28 @@ class BaselinePolicy(ABC):
         self.noise_mean = float(sim.config.noise_mean)
         return self
 
-    @abstractmethod
     def act_sim(self, sim: WarehouseSim) -> int:
-        """The slot to assign to ``sim``'s selected robot."""
+        """The slot to assign to ``sim``'s selected robot (its navigator, scale and,
+        unless this rule has its own, completion noise's mean)."""
+        return self.decide(RuleInput.of_sim(sim, self.needs, self.noise_mean))
+
+    def act(self, observation: Mapping[str, Any]) -> int:
+        """The slot to assign, from a ``warehouse_v1`` observation of the free robot.
+
+        Raises:
+            ConfigError: The rule needs the env's navigator or noise mean and was not
+                built with ``make_baseline(name, env=env)``, or the observation lacks a
+                feature it reads.
+        """
+        decision = RuleInput.of_observation(
+            observation, self.needs, navigator=self.navigator, scale=self.scale,
+            noise_mean=self.noise_mean, reader=self.name,
+        )  # fmt: skip
+        return self.decide(decision)
 
     @abstractmethod
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        """The slot to assign, from a ``warehouse_v1`` observation of the free robot."""
+    def decide(self, decision: RuleInput) -> int:
+        """The slot to assign: the rule itself, on either path's input."""
 
     def _nearest(self, d: np.ndarray, mask: np.ndarray) -> int:
         """Index of the smallest ``d`` among ``mask``; ties broken at random."""
@@ -121,56 +134,30 @@ class MPDM(BaselinePolicy):
     """Nearest pickup for the free robot."""
 
     name = "mpdm"
+    needs = frozenset(("own_distances",))
 
-    def act_sim(self, sim: WarehouseSim) -> int:
-        d = sim.robot_distances()
-        return self._nearest(d, sim.queue_mask)
-
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        tasks = read_features(observation, ("tasks",), self.name)["tasks"]
-        d = np.asarray(tasks[:, 4], dtype=np.float64) * self.scale
-        return self._nearest(d, np.asarray(observation["action_mask"], dtype=bool))
+    def decide(self, decision: RuleInput) -> int:
+        assert decision.own_distances is not None
+        return self._nearest(decision.own_distances, decision.mask)
 
 
 class RBTS(BaselinePolicy):
     """Largest regret: closest other robot's distance minus the free robot's distance."""
 
     name = "rbts"
+    needs = frozenset(("robot", "distances"))
 
-    def act_sim(self, sim: WarehouseSim) -> int:
-        if sim.num_robots == 1:
-            return self._pick(-sim.robot_distances(), sim.queue_mask)
-        dist = sim.distance_matrix()
-        return self._regret_pick(dist, sim.robot, sim.queue_mask)
-
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        if self.navigator is None:
-            raise ConfigError(
-                "RBTS on observations needs the env's navigator: make_baseline('rbts', env=env)"
-            )
-        mask = np.asarray(observation["action_mask"], dtype=bool)
-        features = read_features(observation, ("robots", "tasks", "agent"), self.name)
-        robots = features["robots"]
-        cells = np.rint(robots[:, :2].astype(np.float64) * self.scale).astype(np.int64)
-        origins = np.rint(features["tasks"][:, :2].astype(np.float64) * self.scale)
-        origins = origins.astype(np.int64)
-        # The free robot is the row equal to the agent's own features; robots sharing
-        # a cell and a free time have equal rows, and excluding any one of them is the same.
-        me = int(np.all(robots == features["agent"], axis=1).argmax())
-        if len(robots) == 1:
-            d = self.navigator.distance_matrix(cells, origins[mask])
-            scores = np.full(len(mask), -np.inf)
-            scores[mask] = -d[0]
-            return self._pick(scores, mask)
-        dist = np.zeros((len(robots), len(mask)))
-        dist[:, mask] = self.navigator.distance_matrix(cells, origins[mask])
-        return self._regret_pick(dist, me, mask)
-
-    def _regret_pick(self, dist: np.ndarray, me: int, mask: np.ndarray) -> int:
-        mine = dist[me].copy()
-        dist[me] = np.inf
-        regret = dist.min(axis=0) - mine
-        return self._pick(regret, mask)
+    def decide(self, decision: RuleInput) -> int:
+        dist, me = decision.distances, decision.robot
+        assert dist is not None
+        assert me is not None
+        if len(dist) == 1:
+            return self._pick(-dist[0], decision.mask)
+        # The closest other robot: the acting row out of the minimum (on a copy: the
+        # input is read-only; one M x N copy is cheaper than two partial minima).
+        others = dist.copy()
+        others[me] = np.inf
+        return self._pick(others.min(axis=0) - dist[me], decision.mask)
 
 
 class RandomPolicy(BaselinePolicy):
@@ -178,8 +165,5 @@ class RandomPolicy(BaselinePolicy):
 
     name = "random"
 
-    def act_sim(self, sim: WarehouseSim) -> int:
-        return int(self.rng.choice(np.flatnonzero(sim.queue_mask)))
-
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        return int(self.rng.choice(np.flatnonzero(observation["action_mask"])))
+    def decide(self, decision: RuleInput) -> int:
+        return int(self.rng.choice(np.flatnonzero(decision.mask)))

@@ -23,14 +23,21 @@ only (``|F|`` is capped at ``baselines.batch_max`` = 256: a whole fleet freed at
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from rtaw_marl.decision.rule_input import RuleInput
 from rtaw_marl.policies.baselines import BaselinePolicy
 from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["BatchAssignment", "capped_costs", "match"]
+
+_SIM_ONLY = (
+    "batch acts on the simulator only: the observation does not say which robots "
+    "are heading to pickups; evaluate it with rtaw-eval or act_sim"
+)
 
 
 def match(cost: np.ndarray) -> np.ndarray:
@@ -70,10 +77,11 @@ def capped_costs(
 
 class BatchAssignment(BaselinePolicy):
     """Min-cost matching of the robots free now to the queued tasks, with a soft cap of
-    robots per pickup region.
+    robots per pickup region. It acts on the simulator only (:meth:`act_sim`): the
+    matching needs more than any observation holds.
 
     Args:
-        navigator: Unused on the simulator path (kept for the rules' signature).
+        navigator: Unused (kept for the rules' signature).
         scale: The observation length scale.
         region: Side of a pickup region, in cells.
         cap: Robots heading to one region before its tasks cost ``penalty`` more.
@@ -130,11 +138,24 @@ class BatchAssignment(BaselinePolicy):
         )
         return int(slots[cols[me]])
 
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        raise NotImplementedError(
-            "batch acts on the simulator only: the observation does not say which robots "
-            "are heading to pickups; evaluate it with rtaw-eval or act_sim"
-        )
+    def act(self, observation: Mapping[str, Any]) -> int:
+        """Not available (:meth:`decide`).
+
+        Raises:
+            NotImplementedError: Always; use :meth:`act_sim` on the simulator.
+        """
+        raise NotImplementedError(_SIM_ONLY)
+
+    def decide(self, decision: RuleInput) -> int:
+        """Not available: a batch decision needs what no observation (so no
+        :class:`~rtaw_marl.decision.rule_input.RuleInput`) holds, the robots free in this
+        timestep and the pickups robots are heading to; :meth:`act_sim` reads them from
+        the simulator.
+
+        Raises:
+            NotImplementedError: Always.
+        """
+        raise NotImplementedError(_SIM_ONLY)
 
 
 def _heading(sim: WarehouseSim) -> np.ndarray:

@@ -22,16 +22,13 @@ distances and the planned free times: waiting for other robots is not modelled.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from rtaw_marl.decision.features import candidate_slots, robot_features
-from rtaw_marl.decision.observations import read_features
+from rtaw_marl.decision.features import candidate_slots
+from rtaw_marl.decision.rule_input import RuleInput
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.policies.baselines import BaselinePolicy, free_times
-from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.policies.baselines import BaselinePolicy
 from rtaw_marl.sim.distances import DistanceModel
 
 __all__ = ["Hungarian", "Lookahead", "lookahead_costs", "rollout_distances"]
@@ -98,12 +95,15 @@ class Lookahead(BaselinePolicy):
     """MPDM rollouts of ``horizon`` decisions on the current queue (module docstring).
 
     Args:
-        navigator: Distances (also used on the observation path).
+        navigator: The env's distance model, for :meth:`act` (:meth:`act_sim` uses the
+            simulator's).
         scale: Observation length scale (``Layout.scale``).
         horizon: ``H``, MPDM decisions after the candidate's own (``0``: MPDM).
         noise_mean: Mean completion noise of the rollouts; ``None`` (default): the
             simulator's on :meth:`act_sim`, and the env's once bound (:meth:`bind`,
             ``make_baseline("lookahead", env=env)``), which :meth:`act` needs.
+        candidates: ``K``: with more queued tasks, roll out on the ``K`` nearest the free
+            robot only; ``None``: every queued task.
     """
 
     name = "lookahead"
@@ -127,59 +127,41 @@ class Lookahead(BaselinePolicy):
         self.horizon = horizon
         self.noise_mean = None if noise_mean is None else float(noise_mean)
         self.candidates = candidates
+        # H = 0 is MPDM on the observed distances; rollouts need the robot table, the
+        # queue's cells, the navigator and the noise, and K the own distances to rank.
+        rollout = ("robot", "robot_xy", "free_in", "queue_rows", "navigator", "noise_mean")
+        ranked = ("own_distances",) if candidates is not None else ()
+        self.needs = frozenset(("own_distances",) if horizon == 0 else (*rollout, *ranked))
 
-    def act_sim(self, sim: WarehouseSim) -> int:
+    def decide(self, decision: RuleInput) -> int:
+        mask = decision.mask
         if self.horizon == 0:
-            return self._nearest(sim.robot_distances(), sim.queue_mask)
-        noise = sim.config.noise_mean if self.noise_mean is None else self.noise_mean
-        robots, me = _observed_robots(sim)
-        rows, mask = sim.queue_rows, sim.queue_mask
+            assert decision.own_distances is not None
+            return self._nearest(decision.own_distances, mask)
+        rows = decision.queue_rows
+        assert rows is not None
         if self.candidates is not None and int(mask.sum()) > self.candidates:
             # Large pools: roll out on the K tasks nearest the free robot only (a
             # sub-queue), so a decision costs O(H K (M + K)), not O(H N (M + N)).
-            sub = candidate_slots(sim.robot_distances(), mask, self.candidates)
-            pick = self._choose(
-                sim.navigator, sim.layout.scale, robots, me, rows[sub], mask[sub], noise
-            )
-            return int(sub[pick])
-        return self._choose(sim.navigator, sim.layout.scale, robots, me, rows, mask, noise)
+            assert decision.own_distances is not None
+            sub = candidate_slots(decision.own_distances, mask, self.candidates)
+            return int(sub[self._rollout_pick(decision, rows[sub], mask[sub])])
+        return self._rollout_pick(decision, rows, mask)
 
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        if self.navigator is None or (self.horizon and self.noise_mean is None):
-            raise ConfigError(
-                "lookahead on observations needs the env's navigator and noise mean: "
-                "make_baseline('lookahead', env=env)"
-            )
-        mask = np.asarray(observation["action_mask"], dtype=bool)
-        keys = ("tasks",) if self.horizon == 0 else ("robots", "tasks", "agent")
-        features = read_features(observation, keys, self.name)
-        tasks = features["tasks"].astype(np.float64) * self.scale
-        if self.horizon == 0:
-            return self._nearest(tasks[:, 4], mask)
-        robots = features["robots"]
-        me = _acting_row(robots.astype(np.float64), features["agent"])
-        rows = np.rint(tasks[:, :4]).astype(np.int64)
-        return self._choose(self.navigator, self.scale, robots, me, rows, mask, self.noise_mean)
-
-    def _choose(
-        self,
-        navigator: DistanceModel,
-        scale: float,
-        robots: np.ndarray,
-        me: int,
-        rows: np.ndarray,
-        mask: np.ndarray,
-        noise_mean: float,
-    ) -> int:
-        """The choice from what the observation holds, on both paths: ``float32 [M, 3]``
-        robot rows (so near-ties are decided alike), the acting row, the queue's cells."""
-        cells = np.rint(robots[:, :2].astype(np.float64) * scale).astype(np.int64)
-        ends = rollout_distances(navigator, cells, rows, mask)
+    def _rollout_pick(self, decision: RuleInput, rows: np.ndarray, mask: np.ndarray) -> int:
+        """The slot of ``rows int [K, 4]`` (``mask bool [K]``) whose rollout costs least."""
+        nav, me, free = decision.navigator, decision.robot, decision.free_in
+        cells, noise = decision.robot_xy, decision.noise_mean
+        assert nav is not None
+        assert me is not None
+        assert free is not None
+        assert cells is not None
+        assert noise is not None
+        ends = rollout_distances(nav, cells, rows, mask)
         lengths = np.zeros(len(mask))
-        lengths[mask] = navigator.distance(rows[mask, :2], rows[mask, 2:])
-        free = free_times(robots[:, 2], scale)  # "now" is 0
-        costs = lookahead_costs(
-            ends[me], ends, me, free, 0.0, lengths, mask, self.horizon, noise_mean
+        lengths[mask] = nav.distance(rows[mask, :2], rows[mask, 2:])
+        costs = lookahead_costs(  # "now" is 0: free_in counts from the decision
+            ends[me], ends, me, free, 0.0, lengths, mask, self.horizon, noise
         )
         return self._nearest(costs, mask)
 
@@ -188,36 +170,20 @@ class Hungarian(BaselinePolicy):
     """The free robot's task in a min-cost assignment of queued tasks to all robots."""
 
     name = "hungarian"
+    needs = frozenset(("robot", "free_in", "distances"))
 
-    def act_sim(self, sim: WarehouseSim) -> int:
-        robots, me = _observed_robots(sim)
-        wait = free_times(robots[:, 2], sim.layout.scale)
-        return self._choose(sim.distance_matrix(), wait, me, sim.queue_mask)
-
-    def act(self, observation: Mapping[str, np.ndarray]) -> int:
-        if self.navigator is None:
-            raise ConfigError(
-                "hungarian on observations needs the env's navigator: "
-                "make_baseline('hungarian', env=env)"
-            )
-        mask = np.asarray(observation["action_mask"], dtype=bool)
-        features = read_features(observation, ("robots", "tasks", "agent"), self.name)
-        robots = features["robots"].astype(np.float64)
-        cells = np.rint(robots[:, :2] * self.scale).astype(np.int64)
-        origins = np.rint(features["tasks"][:, :2].astype(np.float64) * self.scale)
-        dist = np.zeros((len(robots), len(mask)))
-        dist[:, mask] = self.navigator.distance_matrix(cells, origins[mask].astype(np.int64))
-        me = _acting_row(robots, features["agent"])
-        return self._choose(dist, free_times(features["robots"][:, 2], self.scale), me, mask)
-
-    def _choose(self, dist: np.ndarray, wait: np.ndarray, robot: int, mask: np.ndarray) -> int:
-        slots = np.flatnonzero(mask)
+    def decide(self, decision: RuleInput) -> int:
+        dist, wait, robot = decision.distances, decision.free_in, decision.robot
+        assert dist is not None
+        assert wait is not None
+        assert robot is not None
+        slots = np.flatnonzero(decision.mask)
         cost = wait[:, None] + dist[:, slots]
         rows, cols = linear_sum_assignment(cost)
         matched = cols[rows == robot]
         if matched.size:
             return int(slots[matched[0]])
-        return self._nearest(dist[robot], mask)
+        return self._nearest(dist[robot], decision.mask)
 
 
 def rollout_distances(
@@ -232,16 +198,3 @@ def rollout_distances(
     live = np.concatenate([np.arange(m), m + np.flatnonzero(mask)])
     out[np.ix_(live, np.flatnonzero(mask))] = d
     return out
-
-
-def _observed_robots(sim: WarehouseSim) -> tuple[np.ndarray, int]:
-    """``float32 [M, 3]`` robot rows as the observation holds them (times until free
-    clipped at 0: a robot idle since before now starts now) and the acting robot's row as
-    :meth:`act` finds it (of identical robots, the first: they are interchangeable)."""
-    robots = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, sim.layout.scale)
-    return robots, _acting_row(robots.astype(np.float64), robots[sim.robot])
-
-
-def _acting_row(robots: np.ndarray, agent: np.ndarray) -> int:
-    """The acting robot's row: equal rows are interchangeable for these rules."""
-    return int(np.all(robots == np.asarray(agent, dtype=np.float64), axis=1).argmax())

@@ -17,7 +17,8 @@ from scipy import stats as scipy_stats
 
 from rtaw_marl.cli.common import typed
 from rtaw_marl.cli.eval import run
-from rtaw_marl.config import CONF_DIR, compose
+from rtaw_marl.config import compose, group_options
+from rtaw_marl.scenarios import ROWS
 from rtaw_marl.sim.builder import build_sim
 
 pytestmark = pytest.mark.integration
@@ -31,15 +32,11 @@ def _compose(overrides: list[str]) -> DictConfig:
     return compose(config_name="eval", overrides=overrides)
 
 
-def _options(group: str) -> list[str]:
-    return sorted(p.stem for p in (CONF_DIR / group).glob("*.yaml"))
-
-
 @pytest.mark.parametrize(
-    ("group", "option"), [(g, o) for g in GROUPS for o in _options(g)], ids=lambda v: str(v)
+    ("group", "option"), [(g, o) for g in GROUPS for o in group_options(g)], ids=lambda v: str(v)
 )
 def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Path) -> None:
-    """Each YAML option composes, and builds a simulator once its mandatory keys are set."""
+    """Each option composes, and builds a simulator once its mandatory keys are set."""
     overrides = [f"{group}={option}"]
     if (group, option) == ("layout", "file"):
         layout = tmp_path / "grid.txt"
@@ -335,7 +332,7 @@ def test_cli_multirun_writes_one_result_per_job(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    ("group", "option"), [(g, o) for g in ("model", "algo") for o in _options(g)]
+    ("group", "option"), [(g, o) for g in ("model", "algo") for o in group_options(g)]
 )
 def test_every_training_option_composes(group: str, option: str) -> None:
     """Each model/algo option composes into the rtaw-train config and builds networks."""
@@ -358,6 +355,7 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     )
     rows = "direct,A,B,C,D,E,direct_m100,A_m100,B_m100,C_m100,D_m100,E_m100"
     assert cfg.hydra.sweeper.params == {"row": rows}
+    assert rows.split(",") == list(ROWS)  # experiment/table1.yaml sweeps every registered row
     assert (cfg.layout.preset, cfg.navigator.name) == ("D", "astar")
     assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10_long"]
     assert cfg.env.episode_mode == "paper"

@@ -33,8 +33,8 @@ def test_a_function_is_compared_with_the_rules_on_the_same_seeds() -> None:
     sim = build_sim(SMALL.spec())
     policies = {
         "first_queued": CallablePolicy(first_queued),
-        "mpdm": make_baseline("mpdm", sim.navigator, sim.layout.scale),
-        "hungarian": make_baseline("hungarian", sim.navigator, sim.layout.scale),
+        "mpdm": make_baseline("mpdm"),
+        "hungarian": make_baseline("hungarian"),
     }
     direct = evaluate(sim, policies, [0, 1, 2])
     for label in policies:

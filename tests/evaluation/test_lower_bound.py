@@ -42,10 +42,7 @@ def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots:
             {"num_robots": robots, "num_tasks": 40, "queue_len": 5}, layout, navigator, tasks
         )
     )
-    policies = {
-        name: make_baseline(name, sim.navigator, sim.layout.scale)
-        for name in ("mpdm", "rbts", "random")
-    }
+    policies = {name: make_baseline(name) for name in ("mpdm", "rbts", "random")}
     seeds = [0, 1, 2]
     results = evaluate(sim, policies, seeds)
     for i, seed in enumerate(seeds):

@@ -104,7 +104,7 @@ def test_own_simulator_predicts_the_official_count(official: dict[str, LoRRRun])
     from rtaw_marl.sim.builder import build_sim
 
     sim = build_sim(lorr_scenario(RANDOM, horizon=STEPS).spec())
-    policy = make_baseline("mpdm", navigator=sim.navigator, scale=sim.layout.scale)
+    policy = make_baseline("mpdm")
     own = run_episode(sim, policy, 0).tasks_finished
     own_moves = sum(
         a != "W" for p in episode_output(sim.schedule())["actualPaths"] for a in p.split(",")
@@ -129,7 +129,7 @@ def test_own_episode_round_trips_through_lorr_format(tmp_path: Path) -> None:
     from rtaw_marl.sim.builder import build_sim
 
     sim = build_sim(lorr_scenario(RANDOM, horizon=120).spec())
-    policy = make_baseline("batch", navigator=sim.navigator, scale=sim.layout.scale)
+    policy = make_baseline("batch")
     finished = run_episode(sim, policy, 3).tasks_finished
     path = write_episode(sim.schedule(), tmp_path / "episode.json", horizon=120)
     again = read_replay(path, sim.layout)

@@ -223,7 +223,7 @@ def test_random_map_hundred_robots() -> None:
     from rtaw_marl.sim.builder import build_sim
 
     sim = build_sim(lorr_scenario(RANDOM, navigator="astar", horizon=150).spec())
-    policy = make_baseline("mpdm", navigator=sim.navigator, scale=sim.layout.scale)
+    policy = make_baseline("mpdm")
     own = run_episode(sim, policy, 0).tasks_finished
     assert abs(lorr.finished - own) <= 0.1 * own
 

@@ -310,14 +310,23 @@ def test_rbts_observation_path_needs_navigator() -> None:
 
 
 def test_make_baseline() -> None:
-    """make_baseline builds each registered rule with its navigator and scale; an unknown name
-    lists mpdm, random and rbts."""
+    """make_baseline builds each registered rule, bound to an env's navigator, scale and
+    noise when given one (a simulator or an env); the rest is keyword-only; an unknown
+    name lists mpdm, random and rbts."""
     assert {"mpdm", "rbts", "random"} <= set(BASELINES)
-    nav = EuclideanDistance(open_grid(4, 4))
+    env = warehouse_v1.env(num_robots=3, num_tasks=5, layout=open_grid(4, 4), navigator="direct")
+    sim = env.unwrapped.sim
     for name, cls in (("mpdm", MPDM), ("rbts", RBTS), ("random", RandomPolicy)):
-        policy = make_baseline(name, navigator=nav, scale=4.0)
-        assert type(policy) is cls
-        assert policy.navigator is nav
-        assert policy.scale == 4.0
+        assert type(make_baseline(name)) is cls
+        for source in (env, sim):
+            policy = make_baseline(name, env=source)
+            assert type(policy) is cls
+            assert policy.navigator is sim.navigator
+            assert policy.scale == 4.0
+            assert policy.noise_mean == sim.config.noise_mean
+    with pytest.raises(TypeError):
+        make_baseline("mpdm", sim)  # type: ignore[misc]
+    with pytest.raises(TypeError, match="expected a WarehouseSim"):
+        make_baseline("mpdm", env=object())
     with pytest.raises(ConfigError, match="unknown policy 'greedy'; available: batch, hindsi"):
         make_baseline("greedy")

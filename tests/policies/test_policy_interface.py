@@ -14,7 +14,7 @@ import pytest
 from rtaw_marl import warehouse_v1
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import run_episode
-from rtaw_marl.policies import BASELINES, Policy, make_baseline
+from rtaw_marl.policies import BASELINES, BaselinesConfig, Policy, make_baseline
 from rtaw_marl.sim.core import WarehouseSim
 
 pytest.importorskip("torch")
@@ -90,6 +90,34 @@ def test_act_and_act_sim_make_the_same_decisions(name: str, navigator: str) -> N
 )
 def test_every_format_that_holds_the_features(name: str, options: dict[str, Any]) -> None:
     assert _play_env(name, "astar", **options) == _play_env(name, "astar")
+
+
+def test_lookahead_on_k_candidates_agrees_both_ways() -> None:
+    """``lookahead_candidates=K`` ranks the K nearest tasks on the observation path too
+    (its own distance column), and so chooses what the fast path chooses."""
+    size = {**SIZE, "queue_len": 12}
+    params = BaselinesConfig(lookahead_candidates=4)
+    env = warehouse_v1.env(navigator="astar", **size)
+    policy = make_baseline("lookahead", env=env, params=params)
+    env.reset(seed=SEED)
+    policy.reset(SEED)
+    actions: list[int] = []
+    for _ in env.agent_iter():
+        obs, _, terminated, truncated, info = env.last()
+        action = None if terminated or truncated else policy.act(obs)
+        if action is not None:
+            actions.append(action)
+        env.step(action)
+    sim = warehouse_v1.env(navigator="astar", **size).unwrapped.sim
+    fast = make_baseline("lookahead", params=params)
+    fast.reset(SEED)
+    sim.reset(SEED)
+    expected = []
+    while not sim.done:
+        expected.append(fast.act_sim(sim))
+        sim.step(expected[-1])
+    assert actions == expected
+    assert info["ttd"] == sim.metrics().ttd
 
 
 def test_the_default_noise_is_modelled() -> None:

@@ -177,7 +177,7 @@ def test_hindsight_horizon_zero_is_greedy() -> None:
 def test_hindsight_and_lookahead_beat_mpdm_on_the_default_scenario() -> None:
     """The outcome the issue asks for, on 3 evaluation seeds (docs/results.md has 20)."""
     sim = build_sim(SimSpec.of({"num_tasks": 200}))
-    policies = {n: make_baseline(n, sim.navigator) for n in ("mpdm", "lookahead", "hindsight")}
+    policies = {n: make_baseline(n) for n in ("mpdm", "lookahead", "hindsight")}
     res = evaluate(sim, policies, [0, 1, 2])
     mpdm, look, hind = (np.mean(res[n]["ttd"]) for n in ("mpdm", "lookahead", "hindsight"))
     assert hind < look < mpdm

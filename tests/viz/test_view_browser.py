@@ -39,7 +39,7 @@ def episodes(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, 
     sim = build_sim(spec)
     schedules, eps = {}, []
     for name in POLICIES:
-        policy = make_baseline(name, navigator=sim.navigator, scale=sim.layout.scale)
+        policy = make_baseline(name)
         ttd = run_episode(sim, policy, SEED).ttd
         schedules[name] = sim.schedule()
         eps.append(ViewEpisode(name, schedules[name], {"TTD": ttd, "seed": SEED}))

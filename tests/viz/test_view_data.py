@@ -194,7 +194,7 @@ def test_a_horizon_episode_shows_every_assigned_task(tmp_path: Path) -> None:
     from tests.cli.test_eval_cli import _tiny_lorr_problem
 
     sim = build_sim(lorr_scenario(_tiny_lorr_problem(tmp_path), horizon=40).spec())
-    run_episode(sim, make_baseline("mpdm", navigator=sim.navigator, scale=sim.layout.scale), 0)
+    run_episode(sim, make_baseline("mpdm"), 0)
     schedule = sim.schedule()
     rows = open_tasks(schedule, sim.tasks, sim.task_robot, sim.task_arrival, sim.task_assigned)
     assert len(rows) >= 1

@@ -97,12 +97,7 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler:
 
         policy: Any = load_policy(str(spec.source), candidates=spec.candidates)
     else:
-        policy = make_baseline(
-            spec.policy,
-            navigator=sim.navigator,
-            scale=sim.layout.scale,
-            params=BaselinesConfig(**spec.baselines),
-        )
+        policy = make_baseline(spec.policy, params=BaselinesConfig(**spec.baselines))
     return PolicyScheduler(policy, sim, seed=spec.seed)
 
 
