@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from rtaw_marl.errors import ConfigError, unknown_name
-from rtaw_marl.evaluation.evaluate import SimPolicy, evaluate
+from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.evaluation.journal import EpisodeJournal, file_digest, with_file_digests
-from rtaw_marl.policies import BASELINES, BaselinesConfig, make_baseline
+from rtaw_marl.policies.spec import PolicySpec
 from rtaw_marl.scenarios import Scenario
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.inputs import seed_list
@@ -52,70 +52,24 @@ __all__ = [
 Ttd = dict[str, list[float]]
 
 
-@dataclass(frozen=True)
-class PolicyRef:
-    """What a table label stands for: a rule by name, a shipped learned policy, or a
-    checkpoint file (a training run's).
-
-    Attributes:
-        kind: ``"rule"`` (:data:`~rtaw_marl.policies.BASELINES`), ``"pretrained"`` or
-            ``"checkpoint"``.
-        name: The rule's or the shipped policy's registry name, or the checkpoint path.
-        params: A rule's parameters (:class:`~rtaw_marl.policies.BaselinesConfig`
-            keys), as ``(key, value)`` pairs.
-    """
-
-    kind: str
-    name: str
-    params: tuple[tuple[str, Any], ...] = ()
-
-    def build(self, sim: Any, label: str) -> SimPolicy:
-        """The policy: a rule bound to ``sim`` (its navigator, scale and noise), or loaded."""
-        if self.kind == "rule":
-            params = BaselinesConfig(**dict(self.params))
-            return make_baseline(self.name, env=sim, params=params)
-        from rtaw_marl.policies.network import load_policy  # torch: only when needed
-
-        return load_policy(self.path(), name=label)
-
-    def loads(self) -> str | None:
-        """None if the policy can be built, else why not (a missing or broken file)."""
-        if self.kind == "rule":
-            return None
-        try:
-            from rtaw_marl.policies.network import load_policy
-
-            load_policy(self.path())
-        except (ConfigError, ModuleNotFoundError) as err:
-            return " ".join(str(err).split())
-        return None
-
-    def path(self) -> Path:
-        """The file of a learned policy (a checkpoint, a shipped policy's)."""
-        if self.kind == "checkpoint":
-            return Path(self.name)
-        from rtaw_marl.policies.pretrained.registry import pretrained_path
-
-        return pretrained_path(self.name)
+#: What a table label stands for: the package's one policy resolver.
+PolicyRef = PolicySpec
 
 
 def rule(name: str, **params: Any) -> PolicyRef:
     """A rule of :data:`~rtaw_marl.policies.BASELINES` (``mpdm``, ``lookahead``, ...),
-    with :class:`~rtaw_marl.policies.BaselinesConfig` parameters."""
-    if name not in BASELINES:
-        raise unknown_name("rule", name, list(BASELINES))
-    BaselinesConfig(**params)  # an unknown or bad parameter fails here, not in a worker
-    return PolicyRef("rule", name, tuple(sorted(params.items())))
+    with :class:`~rtaw_marl.policies.BaselinesConfig` parameters (checked now)."""
+    return PolicySpec.rule(name, params)
 
 
 def learned(name: str) -> PolicyRef:
     """A shipped learned policy (a pretrained registry name)."""
-    return PolicyRef("pretrained", name)
+    return PolicySpec("pretrained", name)
 
 
 def checkpoint(path: str | Path) -> PolicyRef:
     """A learned policy from a checkpoint file (``runs/x/checkpoints/best.pt``)."""
-    return PolicyRef("checkpoint", str(path))
+    return PolicySpec("checkpoint", str(path))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -28,11 +28,12 @@ from rtaw_marl.config import (
     to_typed,
 )
 from rtaw_marl.config.help import help_text, register_help
-from rtaw_marl.errors import ConfigError, RtawError, extra_message
+from rtaw_marl.errors import ConfigError, RtawError, extra_message, unknown_name
 from rtaw_marl.evaluation.evaluate import SimPolicy
-from rtaw_marl.policies import make_baseline
+from rtaw_marl.policies import BASELINES
 from rtaw_marl.policies.labels import checkpoint_labels
-from rtaw_marl.policies.user import import_policy, is_import_spec
+from rtaw_marl.policies.spec import PolicySpec
+from rtaw_marl.policies.user import is_import_spec
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.signals import Interrupted, terminate_as_interrupt
@@ -43,6 +44,7 @@ __all__ = [
     "learned_files",
     "policies_from_cfg",
     "policy_names",
+    "policy_specs",
     "typed",
 ]
 
@@ -211,11 +213,16 @@ def policy_names(names: list[str]) -> list[str]:
     return ["pretrained" if n == _OLD_PRETRAINED else n for n in names]
 
 
-def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
-    """Policies by label: rules by name, your own by ``module:Name`` (label ``Name``;
-    :mod:`rtaw_marl.policies.user`), ``checkpoint`` (one greedy policy per path in
-    ``cfg.checkpoint``) and ``pretrained`` (one per shipped policy named in
-    ``cfg.pretrained``; ``rtaw`` is its deprecated name)."""
+def policy_specs(cfg: Any, names: list[str]) -> dict[str, PolicySpec]:
+    """Label -> :class:`~rtaw_marl.policies.spec.PolicySpec` for a command's policies:
+    rules by name, your own by ``module:Name`` (label ``Name``), ``checkpoint`` (one per
+    path in ``cfg.checkpoint``) and ``pretrained`` (one per shipped policy named in
+    ``cfg.pretrained``; ``rtaw`` is its deprecated name). Nothing is loaded yet.
+
+    Raises:
+        ConfigError: ``checkpoint``/``pretrained`` without its values or the reverse, an
+            unknown rule, or two policies under one label.
+    """
     names = policy_names(names)
     sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}
     for option in sources:
@@ -223,65 +230,59 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
             raise ConfigError(f"policy={option} needs {option}=... (one value or a list)")
         if sources[option] and option not in names:
             raise ConfigError(f"{option}=... given but policy does not include '{option}'")
-    policies: dict[str, SimPolicy] = {}
+    specs: dict[str, PolicySpec] = {}
     for name in names:
         if is_import_spec(name):
-            label, policy = import_policy(name)
-            _add(policies, label, policy)
+            _add(specs, name.rpartition(":")[2], PolicySpec("import", name))
         elif name not in sources:
-            policies[name] = make_baseline(name, env=sim, params=cfg.baselines)
+            if name not in BASELINES:
+                valid = [*BASELINES, *sources, "module:Name"]
+                raise unknown_name("policy", name, valid)
+            _add(specs, name, PolicySpec.rule(name, cfg.baselines))
         else:
-            try:
-                from rtaw_marl.policies.network import load_policy
-            except ModuleNotFoundError as exc:  # an install without the train extra
-                raise ConfigError(extra_message(f"policy={name}", "train", exc.name)) from None
-            threads, k = int(cfg.torch_threads), cfg.candidates
-            for label, path in _learned(name, sources[name], k).items():
-                policy = load_policy(path, name=label, torch_threads=threads, candidates=k)
-                _add(policies, label, policy)
+            k = cfg.candidates
+            for label, source in _learned(name, sources[name], k).items():
+                _add(specs, label, PolicySpec(name, source, candidates=k))
+    return specs
+
+
+def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str, SimPolicy]:
+    """The policies of :func:`policy_specs`, built: rules bound to ``sim``, networks
+    loaded with ``cfg.torch_threads``, user policies imported."""
+    policies = {}
+    for label, spec in policy_specs(cfg, names).items():
+        try:
+            policies[label] = spec.build(sim, label, torch_threads=int(cfg.torch_threads))
+        except ModuleNotFoundError as exc:  # an install without the train extra
+            raise ConfigError(extra_message(f"policy={spec.kind}", "train", exc.name)) from None
     return policies
 
 
-def _add(policies: dict[str, SimPolicy], label: str, policy: SimPolicy) -> None:
-    """Add ``policy`` under ``label``; two policies under one label is an error."""
-    if label in policies:
+def _add(specs: dict[str, PolicySpec], label: str, spec: PolicySpec) -> None:
+    """Add ``spec`` under ``label``; two policies under one label is an error."""
+    if label in specs:
         raise ConfigError(f"two policies are labelled {label!r}; each label names one policy")
-    policies[label] = policy
+    specs[label] = spec
 
 
 def learned_files(cfg: Any, names: list[str]) -> dict[str, Path]:
     """The file each learned policy of :func:`policies_from_cfg` was loaded from, by its
-    label (what an evaluation journal hashes); call it once they have loaded, with the
-    names as :func:`policy_names` spells them."""
-    from rtaw_marl.policies.pretrained.registry import pretrained_path
-
-    files: dict[str, Path] = {}
-    for option in ("checkpoint", "pretrained"):
-        if option not in names:
-            continue
-        learned = _learned(option, as_list(getattr(cfg, option)), cfg.candidates)
-        for label, source in learned.items():
-            # A checkpoint= value that is no file loaded as a shipped name.
-            path = Path(source)
-            files[label] = path if path.is_file() else pretrained_path(str(source))
-    return files
+    label (what an evaluation journal hashes); call it once they have loaded."""
+    specs = policy_specs(cfg, names)
+    return {label: path for label, spec in specs.items() if (path := spec.path()) is not None}
 
 
-def _learned(option: str, sources: list[str], candidates: int | None) -> dict[str, str | Path]:
-    """Label -> what ``load_policy`` loads for each ``checkpoint=`` value (a path, or a
-    shipped name) or ``pretrained=`` value (a shipped name only, never a file).
+def _learned(option: str, sources: list[str], candidates: int | None) -> dict[str, str]:
+    """Label -> source for each ``checkpoint=`` value (a path, or a shipped name) or
+    ``pretrained=`` value (a shipped name only, never a file).
 
     Labels are short: a shipped policy's name, a checkpoint file's
     :func:`~rtaw_marl.policies.labels.checkpoint_labels`; ``@k<K>`` is added with
     ``candidates=K`` (a policy restricted to K candidates is another policy, with its own
     journal entries).
     """
-    from rtaw_marl.policies.pretrained.registry import pretrained_path
-
     tag = "" if candidates is None else f"@k{candidates}"
-    if option == "pretrained":
-        return {f"{source}{tag}": pretrained_path(source) for source in sources}
-    labels = checkpoint_labels(sources)
+    labels = sources if option == "pretrained" else checkpoint_labels(sources)
     return {f"{label}{tag}": source for label, source in zip(labels, sources, strict=True)}
 
 
