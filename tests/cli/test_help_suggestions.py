@@ -22,7 +22,7 @@ pytestmark = pytest.mark.integration
         (["navigator=sipq"], "available: astar, cbs, direct, pibt, sipp", "'navigator=sipp'"),
         (["row=c"], "available: A, A_m100, B", "'row=C'"),
         (["hydra/launcher=jobilb"], "available: basic, joblib", "'hydra/launcher=joblib'"),
-        (["policy=[mpdm,lookahed]"], "available: batch, hindsight", "'lookahead'"),
+        (["policy=[mpdm,lookahed]"], "available: batch, checkpoint, hindsight", "'lookahead'"),
     ],
 )
 def test_eval_suggests_the_closest_name(
