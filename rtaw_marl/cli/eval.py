@@ -49,7 +49,7 @@ from rtaw_marl.cli.common import (
 )
 from rtaw_marl.config import as_plain
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.evaluation import comparisons, evaluate, format_table, write_json_atomic
+from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
 from rtaw_marl.evaluation.config import EvalConfig
 from rtaw_marl.evaluation.evaluate import TimeEstimate
 from rtaw_marl.evaluation.journal import (
@@ -61,6 +61,7 @@ from rtaw_marl.evaluation.journal import (
 )
 from rtaw_marl.evaluation.lower_bound import ttd_lower_bound
 from rtaw_marl.evaluation.report import gap_to_bound
+from rtaw_marl.evaluation.results_file import results_payload
 from rtaw_marl.evaluation.throughput import throughput_table
 from rtaw_marl.evaluation.tidy import write_episodes_csv
 from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcript_path
@@ -136,14 +137,9 @@ def _evaluate(
                 results, sim.num_robots, int(sim.config.horizon or 0), (REFERENCE, cfg.compare_to)
             )
         )
-    payload = {
-        "config": as_plain(cfg),
-        "seeds": seeds,
-        "lower_bound": bound,
-        "lower_bound_time_s": bound_time,
-        "policies": results,
-        "comparisons": comparisons(results, REFERENCE, compare_to=cfg.compare_to),
-    }
+    payload = results_payload(
+        as_plain(cfg), seeds, results, REFERENCE, cfg.compare_to, bound, bound_time
+    )
     path = write_json_atomic(output, payload)
     report.print(f"results: {path}")
     report.print(f"episodes: {write_episodes_csv(_csv(output), results, seeds)}")

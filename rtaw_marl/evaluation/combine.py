@@ -14,7 +14,6 @@ is recomputed from the per-seed values exactly as ``rtaw-eval`` computes its own
 from __future__ import annotations
 
 import json
-import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -23,6 +22,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.journal import NOT_SETTING
+from rtaw_marl.evaluation.results_file import check_results
 from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
 
 __all__ = [
@@ -141,22 +141,9 @@ def _load(path: Path) -> Job:
         data = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ConfigError(f"{path}: cannot be read as JSON ({exc})") from None
-    if not isinstance(data, dict) or not {"config", "seeds", "policies"} <= set(data):
-        raise ConfigError(f"{path}: not an rtaw-eval results file (config, seeds, policies)")
-    seeds, policies = data["seeds"], data["policies"]
-    if not isinstance(seeds, list) or not isinstance(policies, dict) or not policies:
-        raise ConfigError(f"{path}: not an rtaw-eval results file (seeds, policies)")
-    for name, metrics in policies.items():
-        ttd = metrics.get("ttd") if isinstance(metrics, dict) else None
-        if not isinstance(ttd, list) or len(ttd) != len(seeds) or not all(map(_number, ttd)):
-            raise ConfigError(f"{path}: policy {name} has no TTD per seed ({len(seeds)} seeds)")
-    config = data["config"] if isinstance(data["config"], dict) else {}
+    seeds, policies, config = check_results(data, path)
     setting = {k: v for k, v in config.items() if k not in NOT_SETTING}
     return Job(path, dict(_flatten(setting)), _overrides(path), seeds, policies)
-
-
-def _number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def evaluated_policies(jobs: Sequence[Job]) -> list[str]:
