@@ -251,9 +251,15 @@ def _locked(path: Path) -> Iterator[None]:
 def main(argv: list[str] | None = None) -> None:
     """``python -m rtaw_marl.integrations.lorr.kit``: build the ``python`` variant if the
     start kit is there (``make test`` runs this before the suite), else say so and pass.
-    ``--missing`` prints the missing Debian packages, one line, for ``make lorr-kit``."""
+    ``--missing`` prints the missing Debian packages, one line, for ``make lorr-kit``
+    (none when there is no kit to build)."""
     args = sys.argv[1:] if argv is None else argv
     if args == ["--missing"]:
+        try:
+            kit_source()
+        except StartKitError:
+            print()  # no kit here: nothing to build, so nothing to install
+            return
         print(" ".join(missing_packages()))
         return
     if args:
