@@ -59,7 +59,7 @@ class Probe:
     generators are separate from any policy driving the simulator.
 
     Args:
-        sim: The simulator the rules are bound to (its navigator, scale and noise).
+        sim: The simulator the rules are bound to (its distance model, scale and noise).
     """
 
     def __init__(self, sim: WarehouseSim) -> None:

@@ -12,7 +12,7 @@ episode; the min-max spread is shown next to it. Benchmarks:
   final dead steps are not timed).
 * ``AEC+MPDM(obs)``: the same loop with ``MPDM.act`` on the observation.
 * ``episode``: a whole 1000-robot, 5000-task episode on a 256x256 open grid with A*
-  and random tasks, wall time including building the layout and a fresh navigator
+  and random tasks, wall time including building the layout and a fresh distance model
   (cold distance-field cache) -- seconds. Run first, so its warm-up also shows the
   cost of loading the numba kernel in a fresh process.
 
@@ -181,7 +181,7 @@ def repeat(run: Callable[[int], tuple[int, float]], repeats: int, per_second: bo
 
 # --------------------------------------------------------------------------- benchmarks
 def bench_full_episode(sizes: Sizes, policy_cls: type[BaselinePolicy]) -> tuple[Row, float]:
-    """Whole episodes including navigator construction; also the warm-up's wall time."""
+    """Whole episodes including distance model construction; also the warm-up's wall time."""
     grid = {"name": "open", "width": sizes.episode_grid, "height": sizes.episode_grid}
     env = {
         "num_robots": sizes.episode_robots,
@@ -340,7 +340,7 @@ def main(argv: Sequence[str] | None = None) -> str:
 
     notes.append(
         "- episode rows: wall time of one whole episode including building the layout and a "
-        "fresh A* navigator (cold distance-field cache); throughput rows reuse one "
+        "fresh A* distance model (cold distance-field cache); throughput rows reuse one "
         "simulator/env per setting, so their field cache is warm after the warm-up."
     )
     notes.append(

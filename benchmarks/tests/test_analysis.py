@@ -79,7 +79,7 @@ def test_end_distances_match_the_rule(sim) -> None:
     for _ in range(5):
         mask = sim.queue_mask
         ours = end_distances(sim)
-        rule_ends = rollout_distances(sim.navigator, sim.robot_xy, sim.queue_rows, mask)
+        rule_ends = rollout_distances(sim.distance_model, sim.robot_xy, sim.queue_rows, mask)
         live = np.concatenate([np.arange(sim.num_robots), sim.num_robots + np.flatnonzero(mask)])
         np.testing.assert_array_equal(ours[live], rule_ends[live])
         sim.step(int(np.flatnonzero(mask)[0]))

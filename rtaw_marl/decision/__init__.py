@@ -2,7 +2,7 @@
 
 The simulator stops whenever a robot is free and tasks are queued; that moment is one
 *decision*. A :class:`Decision` holds the arrays it is observed from (the robots' cells
-and times until free, the queue's slots, the navigator's distances), for one simulator
+and times until free, the queue's slots, the distance model's distances), for one simulator
 or a batch of them, and :func:`decision_features` turns it into the observation entries
 (the paper's ``robots``, ``tasks``, ``agent``; RTAW+'s ``relations``, ``rivals``;
 the critic's ``fleet``), whose shapes :func:`feature_shapes` writes once. Every reader
@@ -17,7 +17,7 @@ gets the same arrays, bit for bit, by one of two routes:
   ``flat``), and a policy reads its features back with :func:`read_features`.
 
 The hand-written rules decide from one :class:`RuleInput` (what the observation holds,
-plus the navigator), built from the simulator or from an observation, so that each rule
+plus the distance model), built from the simulator or from an observation, so that each rule
 is written once.
 
 Modules: :mod:`~rtaw_marl.decision.features` (the one observation builder, with the

@@ -14,7 +14,7 @@ Two feature sets are produced side by side:
 
 * the paper's coordinates (``robots``, ``tasks``, ``agent``), read by ``model=rtaw``;
 * relational features (``relations``, ``rivals``), read by ``model=rtaw_plus``: what the
-  paper's network would have to learn from coordinates, computed with the navigator's
+  paper's network would have to learn from coordinates, computed with the distance model's
   distances. A robot's *arrival* at a task is its time until free plus the distance from
   the cell where it will be free to the task's origin; the acting robot is free now, so
   its arrival is its distance ``k``. *Rivals* are the other robots, ranked by arrival

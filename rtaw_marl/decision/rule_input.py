@@ -2,7 +2,7 @@
 
 A hand-written rule (``mpdm``, ``rbts``, ``lookahead``, ...) decides from a
 :class:`RuleInput`: the queue's mask, the acting robot's distances, the robot table as
-the free robot's observation holds it, and the navigator to measure more. The rule's
+the free robot's observation holds it, and the distance model to measure more. The rule's
 ``act_sim(sim)`` and ``act(observation)`` are two ways to build that value
 (:meth:`RuleInput.of_sim`, :meth:`RuleInput.of_observation`), followed by the same
 ``decide``; so the rule is written once and both paths choose the same slot.
@@ -11,7 +11,7 @@ The two builders agree by construction where a difference would change a choice:
 are exact integers on both; times until free are the observation's float32 column on
 both, turned back into float64 seconds by :func:`free_times`; the acting robot is the
 first row of the robot table equal to its own (:func:`acting_row`); distances are the
-navigator's. Only ``own_distances`` is read from the observation's float32 ``tasks``
+distance model's. Only ``own_distances`` is read from the observation's float32 ``tasks``
 column on the observation path (the simulator's float64 on the fast path), as the
 network policies read it.
 
@@ -38,12 +38,12 @@ if TYPE_CHECKING:
 __all__ = ["RULE_NEEDS", "RuleInput", "acting_row", "free_times"]
 
 #: The fields of :class:`RuleInput` a rule may ask for (its ``needs``); ``mask`` and
-#: ``scale`` are always there. The fast path always has a ``navigator`` and a
+#: ``scale`` are always there. The fast path always has a ``distance_model`` and a
 #: ``noise_mean``; needing them makes the observation path insist on them (a rule not
 #: bound to an env has neither).
 RULE_NEEDS = frozenset(
-    ("navigator", "noise_mean", "own_distances", "distances", "robot", "robot_xy", "free_in",
-     "queue_rows")
+    ("distance_model", "noise_mean", "own_distances", "distances", "robot", "robot_xy",
+     "free_in", "queue_rows")
 )  # fmt: skip
 
 
@@ -77,14 +77,14 @@ class RuleInput:
     """What a rule decides from (module docstring).
 
     Only the fields a rule ``needs`` (:data:`RULE_NEEDS`) are filled; the others are
-    ``None`` (the fast path fills ``navigator`` and ``noise_mean`` always). The arrays
+    ``None`` (the fast path fills ``distance_model`` and ``noise_mean`` always). The arrays
     are read, never written (on the fast path some are the simulator's own, valid until
     its next step).
 
     Attributes:
         mask: ``bool [N]`` which slots hold a task.
         scale: ``L``, the observation's length scale.
-        navigator: The distance model; ``None`` only for a rule not bound to an env, on
+        distance_model: The distance model; ``None`` only for a rule not bound to an env, on
             the observation path.
         noise_mean: The completion noise's mean, for rules that model it.
         own_distances: ``float64 [N]`` the acting robot's distance to each origin (empty
@@ -100,7 +100,7 @@ class RuleInput:
 
     mask: np.ndarray
     scale: float
-    navigator: DistanceModel | None = None
+    distance_model: DistanceModel | None = None
     noise_mean: float | None = None
     own_distances: np.ndarray | None = None
     distances: np.ndarray | None = None
@@ -130,7 +130,7 @@ class RuleInput:
             table = robot_features(sim.robot_xy, sim.robot_free_at, sim.time, scale)
             free_in = free_times(table[:, 2], scale)
         return cls(
-            sim.queue_mask, scale, sim.navigator,
+            sim.queue_mask, scale, sim.distance_model,
             sim.config.noise_mean if noise_mean is None else noise_mean,
             own_distances=sim.robot_distances() if "own_distances" in needs else None,
             distances=sim.distance_matrix() if "distances" in needs else None,
@@ -144,7 +144,7 @@ class RuleInput:
         observation: Mapping[str, Any],
         needs: Iterable[str] = (),
         *,
-        navigator: DistanceModel | None = None,
+        distance_model: DistanceModel | None = None,
         scale: float = 1.0,
         noise_mean: float | None = None,
         reader: str = "this rule",
@@ -156,13 +156,14 @@ class RuleInput:
             observation: ``{"observation": features, "action_mask": [N]}`` of the free
                 robot (dict or flat features; the robot table needs ``observation="full"``).
             needs: Fields to fill (:data:`RULE_NEEDS`).
-            navigator: The env's distance model (``distances`` and ``navigator`` need it).
+            distance_model: The env's distance model (``distances`` and
+                ``distance_model`` need it).
             scale: The env's ``L``.
             noise_mean: The env's completion noise mean (``noise_mean`` needs it).
             reader: The rule's name, for the error messages.
 
         Raises:
-            ConfigError: A needed navigator or noise mean is missing (the rule was not
+            ConfigError: A needed distance model or noise mean is missing (the rule was not
                 built with ``make_baseline(name, env=env)``), or the observation lacks
                 a needed feature (``compact`` has no robot table).
         """
@@ -170,7 +171,7 @@ class RuleInput:
         missing = [
             what
             for what, need, have in (
-                ("navigator", {"distances", "navigator"}, navigator),
+                ("distance model", {"distances", "distance_model"}, distance_model),
                 ("noise mean", {"noise_mean"}, noise_mean),
             )
             if needs & need and have is None
@@ -201,14 +202,14 @@ class RuleInput:
             if "free_in" in needs:
                 free_in = free_times(table[:, 2], scale)
         if "distances" in needs:
-            assert navigator is not None
+            assert distance_model is not None
             assert rows is not None
             assert robot_xy is not None
             # Only the queued origins are measured; the empty slots' columns stay 0.
             dist = np.zeros((len(robot_xy), len(mask)))
-            dist[:, mask] = navigator.distance_matrix(robot_xy, rows[mask, :2])
+            dist[:, mask] = distance_model.distance_matrix(robot_xy, rows[mask, :2])
         return cls(
-            mask, float(scale), navigator, noise_mean, own_distances=own, distances=dist,
+            mask, float(scale), distance_model, noise_mean, own_distances=own, distances=dist,
             robot=robot, robot_xy=robot_xy if "robot_xy" in needs else None,
             free_in=free_in, queue_rows=rows if "queue_rows" in needs else None,
         )  # fmt: skip

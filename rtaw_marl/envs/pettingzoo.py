@@ -370,9 +370,21 @@ class raw_env(AECEnv):
         self._views = AgentViews(self.sim, self.obs_layout)
 
     @property
+    def distance_model(self) -> DistanceModel:
+        """The simulator's distance model (RBTS uses it to measure other robots'
+        distances)."""
+        return self.sim.distance_model
+
+    @property
     def navigator(self) -> DistanceModel:
-        """The simulator's navigator (RBTS uses it to measure other robots' distances)."""
-        return self.sim.navigator
+        """Deprecated alias of :attr:`distance_model` (the ``navigator`` argument is the
+        option; this is its distance model only)."""
+        warnings.warn(
+            "warehouse_v1 env.navigator is deprecated, use .distance_model",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.sim.distance_model
 
     def __getattr__(self, name: str) -> Any:
         # Python calls this only when normal lookup fails, so live reads pay nothing.

@@ -70,7 +70,7 @@ def ttd_lower_bound(sim: WarehouseSim, seed: int) -> float:
 
     # One call: A* computes each origin's distance field once for all ends.
     ends = np.concatenate([starts, tasks[:, 2:]])
-    cost = sim.navigator.distance_matrix(ends, tasks[:, :2])
+    cost = sim.distance_model.distance_matrix(ends, tasks[:, :2])
     # Both distance models are symmetric (Euclidean; shortest paths on an undirected
     # grid), so the diagonal holds each task's length, computed as the simulator does.
     lengths = np.diagonal(cost[m:]).copy()

@@ -68,7 +68,7 @@ def make_baseline(
     """Build the rule registered as ``name``.
 
     ``make_baseline(name)`` is all evaluation needs: ``act_sim(sim)`` takes the
-    navigator, the scale and the completion noise's mean from the simulator it is
+    distance model, the scale and the completion noise's mean from the simulator it is
     given. ``make_baseline(name, env=env)`` also lets the rule act on ``env``'s
     observations, ``act(obs)``, choosing what ``act_sim`` would.
 
@@ -76,7 +76,7 @@ def make_baseline(
         name: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``, ``batch``
             or ``hindsight``.
         env: A PettingZoo or Gymnasium warehouse env (wrapped or not) or its
-            ``WarehouseSim``: the rule takes its navigator, scale and completion noise's
+            ``WarehouseSim``: the rule takes its distance model, scale and completion noise's
             mean (:meth:`BaselinePolicy.bind`); ``None``: a rule for ``act_sim``.
         params: Rule parameters (horizons, candidates, batch sizes); the defaults when
             ``None``.

@@ -11,7 +11,7 @@ A hand-written rule is written once, as ``decide`` on one
 :class:`~rtaw_marl.decision.rule_input.RuleInput`; ``act_sim`` and ``act`` only build
 that input, from the simulator or from the observation
 (:class:`~rtaw_marl.policies.baselines.BaselinePolicy`). Rules that need more than the
-observation (the navigator to measure distances, the scale, the completion noise's
+observation (the distance model to measure distances, the scale, the completion noise's
 mean) take it from the env when built with ``make_baseline(name, env=env)``; on
 ``act_sim`` the simulator gives it. The ``batch`` rule and the ``hindsight`` reference
 need what no observation holds (the pickups robots are heading to; the episode's

@@ -2,12 +2,12 @@
 
 Each rule is a :class:`~rtaw_marl.policies.base.Policy` written once, as
 :meth:`BaselinePolicy.decide` on a :class:`~rtaw_marl.decision.rule_input.RuleInput`
-(what the free robot's observation holds, plus the navigator). Its two paths only build
+(what the free robot's observation holds, plus the distance model). Its two paths only build
 that input: :meth:`BaselinePolicy.act_sim` from the simulator (the fast path used by
 evaluation) and :meth:`BaselinePolicy.act` from a PettingZoo observation (the
 ``{"observation": features, "action_mask": mask}`` of ``warehouse_v1``, dict or flat;
 RBTS needs ``observation="full"``). So both choose the same task for the same state,
-once the rule knows the env's navigator, scale and completion noise's mean
+once the rule knows the env's distance model, scale and completion noise's mean
 (``make_baseline(name, env=env)``, or :meth:`BaselinePolicy.bind`), which ``act``
 needs. Ties (within a relative 1e-6) are broken uniformly at random with the policy's
 own generator, seeded by :meth:`~BaselinePolicy.reset`: in the paper's two-task setting
@@ -27,6 +27,7 @@ MPDM faces two equally close pickups and picks at random.
 
 from __future__ import annotations
 
+import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any
@@ -50,11 +51,15 @@ class BaselinePolicy(ABC):
     :meth:`act`.
 
     Args:
-        navigator: The env's distance model, for :meth:`act` when a rule measures
+        distance_model: The env's distance model, for :meth:`act` when a rule measures
             distances beyond the observation (RBTS, lookahead, hungarian); ``None``
             otherwise. :meth:`act_sim` uses the simulator's.
         scale: Length scale of the observation (``Layout.scale``), to turn observed
             coordinates back into cells on :meth:`act`.
+        navigator: Deprecated name of ``distance_model`` (a ``DeprecationWarning``).
+
+    Raises:
+        TypeError: Both ``distance_model`` and ``navigator`` are given.
 
     Attributes:
         needs: The input fields :meth:`decide` reads
@@ -65,8 +70,26 @@ class BaselinePolicy(ABC):
     name: str = ""
     needs: frozenset[str] = frozenset()
 
-    def __init__(self, navigator: DistanceModel | None = None, scale: float = 1.0) -> None:
-        self.navigator = navigator
+    def __init__(
+        self,
+        distance_model: DistanceModel | None = None,
+        scale: float = 1.0,
+        *,
+        navigator: DistanceModel | None = None,
+    ) -> None:
+        if navigator is not None:
+            if distance_model is not None:
+                raise TypeError(
+                    f"{type(self).__name__}() got both distance_model and navigator "
+                    "(its deprecated name)"
+                )
+            warnings.warn(
+                f"{type(self).__name__}(navigator=...) is deprecated, use distance_model=...",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+            distance_model = navigator
+        self.distance_model = distance_model
         self.scale = float(scale)
         #: Mean completion noise, for rules that model it (``None``: the simulator's).
         self.noise_mean: float | None = None
@@ -80,17 +103,17 @@ class BaselinePolicy(ABC):
         self.rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
 
     def bind(self, env: Any) -> BaselinePolicy:
-        """Take the navigator, scale and completion noise's mean of ``env`` (a
+        """Take the distance model, scale and completion noise's mean of ``env`` (a
         ``WarehouseSim`` or a PettingZoo / Gymnasium warehouse env), so that :meth:`act`
         on its observations chooses what :meth:`act_sim` chooses; returns ``self``."""
         sim = simulator_of(env)
-        self.navigator = sim.navigator
+        self.distance_model = sim.distance_model
         self.scale = float(sim.layout.scale)
         self.noise_mean = float(sim.config.noise_mean)
         return self
 
     def act_sim(self, sim: WarehouseSim) -> int:
-        """The slot to assign to ``sim``'s selected robot (its navigator, scale and,
+        """The slot to assign to ``sim``'s selected robot (its distance model, scale and,
         unless this rule has its own, completion noise's mean)."""
         return self.decide(RuleInput.of_sim(sim, self.needs, self.noise_mean))
 
@@ -98,12 +121,12 @@ class BaselinePolicy(ABC):
         """The slot to assign, from a ``warehouse_v1`` observation of the free robot.
 
         Raises:
-            ConfigError: The rule needs the env's navigator or noise mean and was not
+            ConfigError: The rule needs the env's distance model or noise mean and was not
                 built with ``make_baseline(name, env=env)``, or the observation lacks a
                 feature it reads.
         """
         decision = RuleInput.of_observation(
-            observation, self.needs, navigator=self.navigator, scale=self.scale,
+            observation, self.needs, distance_model=self.distance_model, scale=self.scale,
             noise_mean=self.noise_mean, reader=self.name,
         )  # fmt: skip
         return self.decide(decision)

@@ -81,7 +81,7 @@ class BatchAssignment(BaselinePolicy):
     matching needs more than any observation holds.
 
     Args:
-        navigator: Unused (kept for the rules' signature).
+        distance_model: Unused (kept for the rules' signature).
         scale: The observation length scale.
         region: Side of a pickup region, in cells.
         cap: Robots heading to one region before its tasks cost ``penalty`` more.
@@ -93,7 +93,7 @@ class BatchAssignment(BaselinePolicy):
     name = "batch"
 
     def __init__(
-        self, navigator: object = None, scale: float = 1.0, region: int = 8, cap: int = 4,
+        self, distance_model: object = None, scale: float = 1.0, region: int = 8, cap: int = 4,
         penalty: float = 20.0, max_batch: int = 256,
     ) -> None:  # fmt: skip
         super().__init__(None, scale)

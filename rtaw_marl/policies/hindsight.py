@@ -80,7 +80,7 @@ class Hindsight:
     def _shadow_of(self, sim: WarehouseSim) -> WarehouseSim:
         if self._for is not sim:
             # Shares the layout, the distance caches and the task stream; instant travel.
-            self._shadow = WarehouseSim(sim.config, sim.layout, sim.navigator, sim.stream)
+            self._shadow = WarehouseSim(sim.config, sim.layout, sim.distance_model, sim.stream)
             self._for = sim
         assert self._shadow is not None
         return self._shadow

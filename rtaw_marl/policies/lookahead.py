@@ -16,7 +16,7 @@
     takes the task it is matched to, or its nearest task when it is left unmatched.
 
 Both use only what the RTAW observation holds (robot cells and free times, queued tasks)
-plus navigator distances. With a collision-aware navigator they reason with A*
+plus the distance model's distances. With a collision-aware navigator they reason with A*
 distances and the planned free times: waiting for other robots is not modelled.
 """
 
@@ -95,7 +95,7 @@ class Lookahead(BaselinePolicy):
     """MPDM rollouts of ``horizon`` decisions on the current queue (module docstring).
 
     Args:
-        navigator: The env's distance model, for :meth:`act` (:meth:`act_sim` uses the
+        distance_model: The env's distance model, for :meth:`act` (:meth:`act_sim` uses the
             simulator's).
         scale: Observation length scale (``Layout.scale``).
         horizon: ``H``, MPDM decisions after the candidate's own (``0``: MPDM).
@@ -110,14 +110,14 @@ class Lookahead(BaselinePolicy):
 
     def __init__(
         self,
-        navigator: DistanceModel | None = None,
+        distance_model: DistanceModel | None = None,
         scale: float = 1.0,
         *,
         horizon: int,
         noise_mean: float | None = None,
         candidates: int | None = None,
     ) -> None:
-        super().__init__(navigator, scale)
+        super().__init__(distance_model, scale)
         if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 0:
             raise ConfigError(f"lookahead horizon must be an integer >= 0, got {horizon!r}")
         if candidates is not None and (
@@ -128,8 +128,8 @@ class Lookahead(BaselinePolicy):
         self.noise_mean = None if noise_mean is None else float(noise_mean)
         self.candidates = candidates
         # H = 0 is MPDM on the observed distances; rollouts need the robot table, the
-        # queue's cells, the navigator and the noise, and K the own distances to rank.
-        rollout = ("robot", "robot_xy", "free_in", "queue_rows", "navigator", "noise_mean")
+        # queue's cells, the distance model and the noise, and K the own distances to rank.
+        rollout = ("robot", "robot_xy", "free_in", "queue_rows", "distance_model", "noise_mean")
         ranked = ("own_distances",) if candidates is not None else ()
         self.needs = frozenset(("own_distances",) if horizon == 0 else (*rollout, *ranked))
 
@@ -150,7 +150,7 @@ class Lookahead(BaselinePolicy):
 
     def _rollout_pick(self, decision: RuleInput, rows: np.ndarray, mask: np.ndarray) -> int:
         """The slot of ``rows int [K, 4]`` (``mask bool [K]``) whose rollout costs least."""
-        nav, me, free = decision.navigator, decision.robot, decision.free_in
+        nav, me, free = decision.distance_model, decision.robot, decision.free_in
         cells, noise = decision.robot_xy, decision.noise_mean
         assert nav is not None
         assert me is not None
@@ -187,14 +187,14 @@ class Hungarian(BaselinePolicy):
 
 
 def rollout_distances(
-    navigator: DistanceModel, robot_xy: np.ndarray, rows: np.ndarray, mask: np.ndarray
+    distance_model: DistanceModel, robot_xy: np.ndarray, rows: np.ndarray, mask: np.ndarray
 ) -> np.ndarray:
     """``float64 [M + N, N]``: distances from each robot's cell, then from each queued
     destination, to each queued origin; ``inf`` for empty slots (rows and columns)."""
     m, n = len(robot_xy), len(mask)
     sources = np.concatenate([robot_xy, rows[mask, 2:]])
     out = np.full((m + n, n), np.inf)
-    d = navigator.distance_matrix(sources, rows[mask, :2])
+    d = distance_model.distance_matrix(sources, rows[mask, :2])
     live = np.concatenate([np.arange(m), m + np.flatnonzero(mask)])
     out[np.ix_(live, np.flatnonzero(mask))] = d
     return out

@@ -69,7 +69,7 @@ class PolicySpec:
         label: str | None = None,
         torch_threads: int | None = None,
     ) -> Any:
-        """The policy: a rule bound to ``sim`` (its navigator, scale and noise, for
+        """The policy: a rule bound to ``sim`` (its distance model, scale and noise, for
         ``act(obs)``; ``act_sim`` needs none), a loaded network, or the user's object.
 
         Raises:

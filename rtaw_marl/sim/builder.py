@@ -5,7 +5,7 @@ TorchRL env, the trainer, ``rtaw-eval``, ``rtaw-render`` and the experiment scri
 :class:`SimSpec` holds the four config groups (``env``, ``layout``, ``navigator``,
 ``tasks``) as typed options; :class:`SimFactory` builds the layout, the distance model and
 the task stream once and makes any number of simulators sharing them (the distance
-fields are cached per navigator), each with its own executor.
+fields are cached per distance model), each with its own executor.
 """
 
 from __future__ import annotations
@@ -110,7 +110,7 @@ class SimFactory:
     Attributes:
         spec: The spec.
         layout: The layout.
-        navigator: The distance model, shared by every simulator made here.
+        distance_model: The distance model, shared by every simulator made here.
         tasks: The task stream (stateless; each simulator draws from its own seed).
     """
 
@@ -123,7 +123,7 @@ class SimFactory:
             self._check_memory(*size, name=spec.layout.name)
         self.layout: Layout = spec.layout.build()
         self._check_memory(self.layout.width, self.layout.height, name=self.layout.name)
-        self.navigator: DistanceModel = spec.navigator.distance_model(self.layout)
+        self.distance_model: DistanceModel = spec.navigator.distance_model(self.layout)
         self.tasks: TaskStream = spec.tasks.build()
 
     def _check_memory(self, width: int, height: int, name: str) -> None:
@@ -135,7 +135,7 @@ class SimFactory:
         return WarehouseSim(
             self.spec.env,
             self.layout,
-            self.navigator,
+            self.distance_model,
             self.tasks,
             buffers,
             executor=self.spec.navigator.executor(),

@@ -33,6 +33,7 @@ done. :meth:`WarehouseSim.schedule` returns the executed episode.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -84,7 +85,8 @@ class WarehouseSim:
     Args:
         config: Simulator parameters.
         layout: The grid.
-        navigator: Distances on ``layout``.
+        distance_model: Distances on ``layout`` (the policies measure with it; kept as
+            ``distance_model``).
         tasks: The task stream.
         buffers: Where to keep the robot and queue state; allocated when ``None``.
         executor: How robots travel (a fresh one per simulator);
@@ -109,13 +111,13 @@ class WarehouseSim:
         self,
         config: SimConfig,
         layout: Layout,
-        navigator: DistanceModel,
+        distance_model: DistanceModel,
         tasks: TaskStream,
         buffers: SimBuffers | None = None,
         executor: Executor | None = None,
     ) -> None:
-        if navigator.layout is not layout:
-            raise ConfigError("navigator was built for a different layout")
+        if distance_model.layout is not layout:
+            raise ConfigError("the distance model was built for a different layout")
         if config.num_robots > len(layout.main_cells) and config.robot_starts is None:
             raise ConfigError(
                 f"env.num_robots={config.num_robots} exceeds the {len(layout.main_cells)} free "
@@ -132,7 +134,7 @@ class WarehouseSim:
                 )
         self.config = config
         self.layout = layout
-        self.navigator = navigator
+        self.distance_model = distance_model
         self.stream = tasks
         self.num_robots = config.num_robots
         self.queue_len = config.queue_len
@@ -141,7 +143,7 @@ class WarehouseSim:
         self._refill_on_finish = config.refill == "finish"
         self._num_decisions = config.num_tasks
         self._reward_code = REWARDS.index(config.reward)
-        self._slots = navigator.target_slots(config.queue_len)
+        self._slots = distance_model.target_slots(config.queue_len)
         if buffers is None:
             buffers = SimBuffers.allocate(config.num_robots, config.queue_len)
         buffers.check(config.num_robots, config.queue_len)
@@ -152,7 +154,7 @@ class WarehouseSim:
         self.queue_length = buffers.queue_length
         self.queue_ids = np.full(config.queue_len, -1, dtype=np.int64)
         self._executor = InstantTravel() if executor is None else executor
-        self._executor.bind(config, layout, navigator)
+        self._executor.bind(config, layout, distance_model)
         self.done = True
         self.truncated = False
 
@@ -227,7 +229,7 @@ class WarehouseSim:
             cells = self.layout.main_cells
             starts = cells[start_rng.choice(len(cells), size=self.num_robots, replace=False)]
         k, kinds = len(tasks), ("origin of task", "destination of task", "start of robot")
-        self.navigator.check_connected(
+        self.distance_model.check_connected(
             np.concatenate([tasks[:, :2], tasks[:, 2:], starts]),
             lambda i: f"{kinds[min(i // k, 2)]} {i - min(i // k, 2) * k}",
         )
@@ -402,6 +404,17 @@ class WarehouseSim:
             empty = np.flatnonzero(~self.queue_mask)
             if len(empty):
                 self._refill(int(empty[0]), -1, self.time)
+
+    @property
+    def navigator(self) -> DistanceModel:
+        """Deprecated alias of :attr:`distance_model` (the ``navigator`` option names a
+        distance model and an executor; this is the distance model only)."""
+        warnings.warn(
+            "WarehouseSim.navigator is deprecated, use .distance_model",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.distance_model
 
     @property
     def executor(self) -> Executor:

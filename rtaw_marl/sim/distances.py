@@ -91,7 +91,7 @@ class DistanceModel(ABC):
 
     @abstractmethod
     def target_slots(self, size: int) -> TargetSlots:
-        """A new :class:`TargetSlots` with ``size`` slots bound to this navigator."""
+        """A new :class:`TargetSlots` with ``size`` slots bound to this distance model."""
 
     @abstractmethod
     def path(self, a: tuple[int, int], b: tuple[int, int]) -> np.ndarray:
@@ -100,7 +100,7 @@ class DistanceModel(ABC):
     def check_connected(self, cells: np.ndarray, what: str | Callable[[int], str]) -> None:
         """Raise :class:`LayoutError` unless all ``cells [K, 2]`` are mutually reachable.
 
-        The base navigator ignores obstacles, so every pair is reachable.
+        The base distance model ignores obstacles, so every pair is reachable.
 
         Args:
             cells: ``(x, y)`` rows.
@@ -319,47 +319,47 @@ class GridDistance(DistanceModel):
 class _FieldSlots(TargetSlots):
     """Slot targets as a dense ``[N, cells]`` copy of their fields, so a query is one gather."""
 
-    def __init__(self, navigator: GridDistance, size: int) -> None:
+    def __init__(self, distance_model: GridDistance, size: int) -> None:
         super().__init__(size)
-        self._nav = navigator
-        self._fields = np.zeros((size, navigator._free_padded.size), dtype=np.int32)
+        self._model = distance_model
+        self._fields = np.zeros((size, distance_model._free_padded.size), dtype=np.int32)
         self._rows = np.arange(size)
 
     def set(self, slot: int, x: int, y: int) -> None:
-        self._fields[slot] = self._nav.field(x, y)
+        self._fields[slot] = self._model.field(x, y)
 
     def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
-        idx = self._nav._padded_index(xy)
+        idx = self._model._padded_index(xy)
         if slots is None:
             return self._fields[:, idx].T.astype(np.float64)
         # One gather of the [K, P] entries (never a copy of K whole fields).
         return self._fields[np.asarray(slots)[:, None], idx].T.astype(np.float64)
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
-        return self._fields[:, (y + 1) * self._nav._wp + x + 1].astype(np.float64)
+        return self._fields[:, (y + 1) * self._model._wp + x + 1].astype(np.float64)
 
     def distance_to(self, slot: int, x: int, y: int) -> float:
-        d = int(self._fields[slot, (y + 1) * self._nav._wp + x + 1])
+        d = int(self._fields[slot, (y + 1) * self._model._wp + x + 1])
         if d < 0:
             raise LayoutError(
                 f"no path from (x={x}, y={y}) to a queued task origin on layout "
-                f"{self._nav.layout.name!r}"
+                f"{self._model.layout.name!r}"
             )
         return float(d)
 
 
 class _CellSlots(TargetSlots):
-    """Slot targets as cells only; a query computes (or takes from the navigator's
+    """Slot targets as cells only; a query computes (or takes from the distance model's
     cache) the fields of its smaller side: the ``P`` sources, or the ``K`` targets."""
 
-    def __init__(self, navigator: GridDistance, size: int) -> None:
+    def __init__(self, distance_model: GridDistance, size: int) -> None:
         super().__init__(size)
-        self._nav = navigator
+        self._model = distance_model
         self._cells = np.zeros(size, dtype=np.int64)  # padded index of each target
         self._xy = np.zeros((size, 2), dtype=np.int64)
 
     def set(self, slot: int, x: int, y: int) -> None:
-        self._cells[slot] = (y + 1) * self._nav._wp + x + 1
+        self._cells[slot] = (y + 1) * self._model._wp + x + 1
         self._xy[slot] = (x, y)
 
     def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
@@ -370,18 +370,18 @@ class _CellSlots(TargetSlots):
             # Row by row: stacking P whole fields first would copy P x cells entries.
             out = np.empty((len(xy), len(cells)), dtype=np.float64)
             for i, (x, y) in enumerate(xy.tolist()):
-                out[i] = self._nav.field(x, y)[cells]
+                out[i] = self._model.field(x, y)[cells]
             return out
-        return self._nav.fields(targets)[:, self._nav._padded_index(xy)].T.astype(np.float64)
+        return self._model.fields(targets)[:, self._model._padded_index(xy)].T.astype(np.float64)
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
-        return self._nav.field(x, y)[self._cells].astype(np.float64)
+        return self._model.field(x, y)[self._cells].astype(np.float64)
 
     def distance_to(self, slot: int, x: int, y: int) -> float:
-        d = int(self._nav.field(x, y)[self._cells[slot]])
+        d = int(self._model.field(x, y)[self._cells[slot]])
         if d < 0:
             raise LayoutError(
                 f"no path from (x={x}, y={y}) to a queued task origin on layout "
-                f"{self._nav.layout.name!r}"
+                f"{self._model.layout.name!r}"
             )
         return float(d)

@@ -8,7 +8,7 @@ it at construction and reset with every episode.
 
 :class:`InstantTravel` (``name="instant"``)
     Robots move independently (they pass through each other): a task's TTD is the
-    navigator's distance to its origin and the robot is free at the completion time
+    distance model's distance to its origin and the robot is free at the completion time
     plus Gaussian noise ``N(noise_mean, noise_var)``, never before the decision time.
 Collision-aware executors (``sipp``, ``cbs``)
     Robots occupy cells and wait for each other on a shared grid; see
@@ -99,7 +99,7 @@ class Executor(ABC):
         """Whether robots occupy cells and wait for each other (a schedule exists)."""
 
     @abstractmethod
-    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
+    def bind(self, config: SimSettings, layout: Layout, distance_model: DistanceModel) -> None:
         """Attach to a simulator; called once by its constructor.
 
         Raises:
@@ -196,7 +196,7 @@ class Executor(ABC):
 
 
 class InstantTravel(Executor):
-    """Independent robots timed by navigator distances plus completion noise."""
+    """Independent robots timed by the distance model's distances plus completion noise."""
 
     name = "instant"
 
@@ -204,11 +204,11 @@ class InstantTravel(Executor):
     def collision_aware(self) -> bool:
         return False
 
-    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
+    def bind(self, config: SimSettings, layout: Layout, distance_model: DistanceModel) -> None:
         del layout
         self._config = config
         self._noise_std = float(np.sqrt(config.noise_var))
-        self._navigator_name = navigator.name
+        self._navigator_name = distance_model.name
 
     def reset(self, starts: np.ndarray, records: EpisodeRecords, rng: np.random.Generator) -> None:
         del starts

@@ -816,6 +816,21 @@ def test_render_none_returns_none() -> None:
     assert env.render() is None
 
 
+def test_navigator_property_is_a_deprecated_alias_of_distance_model() -> None:
+    """``env.navigator`` (raw or wrapped) still returns the simulator's distance model, with
+    one ``DeprecationWarning``; ``env.distance_model`` warns about nothing."""
+    env = warehouse_v1.env(num_robots=2, num_tasks=3, navigator="direct")
+    raw = env.unwrapped
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model = raw.distance_model
+    assert model is raw.sim.distance_model
+    for source in (raw, env):
+        with pytest.warns(DeprecationWarning, match=r"use \.distance_model") as caught:
+            assert source.navigator is model
+        assert len(caught) == 1
+
+
 # --------------------------------------------------------------------------- paper numbers
 def _poc_total(policy_name: str, seed: int) -> float:
     env = warehouse_v1.env(**POC_KWARGS)
@@ -823,7 +838,7 @@ def _poc_total(policy_name: str, seed: int) -> float:
     if policy_name == "mpdm":
         policy = MPDM(scale=raw.scale)
     else:
-        policy = RBTS(navigator=raw.navigator, scale=raw.scale)
+        policy = RBTS(distance_model=raw.distance_model, scale=raw.scale)
     policy.reset(seed)
     total, info = episode_return(env, choose=policy.act, seed=seed)
     assert info["ttd"] == pytest.approx(-total, rel=1e-12)

@@ -149,7 +149,7 @@ def untimed_assignment_bound(sim: WarehouseSim, seed: int) -> float:
     sim.reset(seed)
     tasks = sim.tasks[: sim.config.num_tasks]
     ends = np.concatenate([sim.robot_start_xy, tasks[:, 2:]])
-    cost = sim.navigator.distance_matrix(ends, tasks[:, :2])
+    cost = sim.distance_model.distance_matrix(ends, tasks[:, :2])
     t = len(tasks)
     cost[sim.num_robots + np.arange(t), np.arange(t)] = np.inf
     rows, cols = linear_sum_assignment(cost)

@@ -17,6 +17,7 @@ import pytest
 
 from rtaw_marl.integrations.lorr.entry import RunSpec, build_scheduler
 from rtaw_marl.integrations.lorr.scheduler import PolicyScheduler, Timestep
+from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.lorr import read_problem
 
 pytestmark = pytest.mark.integration
@@ -63,7 +64,7 @@ class FakeLoRR:
             progress=lambda t: pool[t]["idx"],
         )
 
-    def apply(self, proposed: list[int], navigator) -> None:
+    def apply(self, proposed: list[int], distance_model: DistanceModel) -> None:
         """Validate and apply a schedule, move every robot one step, finish errands."""
         assert len(proposed) == self.m
         seen: set[int] = set()
@@ -84,7 +85,7 @@ class FakeLoRR:
         for robot in np.flatnonzero(self.schedule >= 0).tolist():
             task = self.pool[int(self.schedule[robot])]
             goal = task["locs"][task["idx"]]
-            self.loc[robot] = self._toward(navigator, int(self.loc[robot]), goal)
+            self.loc[robot] = self._toward(distance_model, int(self.loc[robot]), goal)
             if self.loc[robot] == goal:
                 task["idx"] += 1
                 if task["idx"] == len(task["locs"]):
@@ -93,14 +94,14 @@ class FakeLoRR:
                     self.finished += 1
         self._reveal()
 
-    def _toward(self, navigator, here: int, goal: int) -> int:
+    def _toward(self, distance_model: DistanceModel, here: int, goal: int) -> int:
         if here == goal:
             return here
         x, y = here % self.width, here // self.width
         gx, gy = goal % self.width, goal // self.width
         steps = [(x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)]
         ok = [(a, b) for a, b in steps if self.layout.is_free(np.array([a, b]))]
-        d = navigator.distance(np.array(ok), np.repeat([[gx, gy]], len(ok), axis=0))
+        d = distance_model.distance(np.array(ok), np.repeat([[gx, gy]], len(ok), axis=0))
         a, b = ok[int(np.argmin(d))]
         return b * self.width + a
 
@@ -125,7 +126,7 @@ def _scheduler(problem: Path, policy: str, **spec: object) -> PolicyScheduler:
 def _play(problem: Path, scheduler: PolicyScheduler, steps: int, budget: float = 1.0) -> FakeLoRR:
     lorr = FakeLoRR(problem)
     for _ in range(steps):
-        lorr.apply(scheduler.plan(lorr.step(), budget), scheduler.sim.navigator)
+        lorr.apply(scheduler.plan(lorr.step(), budget), scheduler.sim.distance_model)
     return lorr
 
 
@@ -158,7 +159,7 @@ def test_mpdm_takes_the_nearest_open_task(tmp_path: Path) -> None:
     scheduler = _scheduler(problem, "mpdm")
     lorr = FakeLoRR(problem)
     proposed = scheduler.plan(lorr.step(), 1.0)
-    nav, width = scheduler.sim.navigator, lorr.width
+    nav, width = scheduler.sim.distance_model, lorr.width
     xy = lambda loc: np.array([[loc % width, loc // width]])  # noqa: E731
     open_tasks = sorted(lorr.pool)
     d0 = np.array([nav.distance(xy(0), xy(lorr.pool[t]["locs"][0]))[0] for t in open_tasks])
@@ -174,7 +175,7 @@ def test_busy_robots_keep_their_tasks(tmp_path: Path) -> None:
     scheduler = _scheduler(problem, "mpdm")
     lorr = FakeLoRR(problem)
     first = scheduler.plan(lorr.step(), 1.0)
-    lorr.apply(first, scheduler.sim.navigator)
+    lorr.apply(first, scheduler.sim.distance_model)
     step = lorr.step()
     again = scheduler.plan(step, 1.0)
     busy = np.flatnonzero(step.schedule >= 0)

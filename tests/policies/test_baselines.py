@@ -81,7 +81,7 @@ def test_mpdm_picks_nearest(setting: str) -> None:
         valid = np.flatnonzero(sim.queue_mask)
         origins = sim.tasks[sim.queue_ids[valid], :2]
         here = np.repeat(sim.robot_xy[sim.robot][None], len(valid), axis=0)
-        d = sim.navigator.distance(here, origins)
+        d = sim.distance_model.distance(here, origins)
         assert slot in valid
         assert d[valid.tolist().index(slot)] == pytest.approx(d.min())
         sim.step(slot)
@@ -145,7 +145,7 @@ def test_rbts_regret_by_hand() -> None:
     mpdm = MPDM()
     mpdm.reset(0)
     assert mpdm.act_sim(sim) == 0
-    # The env's observation path agrees (RBTS needs the navigator there).
+    # The env's observation path agrees (RBTS needs the distance model there).
     env = warehouse_v1.env(
         num_robots=3,
         num_tasks=3,
@@ -161,7 +161,7 @@ def test_rbts_regret_by_hand() -> None:
     env.reset(seed=0)
     obs = env.observe(env.agent_selection)
     raw = env.unwrapped
-    assert RBTS(navigator=raw.navigator, scale=raw.scale).act(obs) == 1
+    assert RBTS(distance_model=raw.distance_model, scale=raw.scale).act(obs) == 1
 
 
 def test_rbts_counts_busy_robots_at_their_destination() -> None:
@@ -294,23 +294,38 @@ def test_observation_path_matches_simulator(name: str, setting: str, num_robots:
     assert episode_ttd == pytest.approx(expected_ttd, rel=1e-9)
 
 
-def test_rbts_observation_path_needs_navigator() -> None:
-    """RBTS.act without a navigator is a ConfigError (it must measure other robots)."""
+def test_rbts_observation_path_needs_a_distance_model() -> None:
+    """RBTS.act without a distance model is a ConfigError (it must measure other robots)."""
     obs = {
         "robots": np.zeros((2, 3), np.float32),
         "tasks": np.zeros((2, 6), np.float32),
         "agent": np.zeros(3, np.float32),
         "action_mask": np.ones(2, np.int8),
     }
-    with pytest.raises(ConfigError, match="navigator"):
+    with pytest.raises(ConfigError, match="distance model"):
         RBTS().act(obs)
+
+
+def test_navigator_keyword_is_a_deprecated_name_of_distance_model() -> None:
+    """``RBTS(navigator=...)`` (the documented spelling before ``distance_model``) still
+    binds the distance model, with one ``DeprecationWarning``; giving both is an error."""
+    layout = open_grid(4, 4)
+    model = EuclideanDistance(layout)
+    deprecated = r"RBTS\(navigator=\.\.\.\) is deprecated, use distance_model="
+    with pytest.warns(DeprecationWarning, match=deprecated) as caught:
+        rbts = RBTS(navigator=model, scale=4.0)
+    assert len(caught) == 1
+    assert rbts.distance_model is model
+    assert rbts.scale == 4.0
+    with pytest.raises(TypeError, match="both distance_model and navigator"):
+        RBTS(model, navigator=model)
 
 
 # ----------------------------------------------------------------- registry
 
 
 def test_make_baseline() -> None:
-    """make_baseline builds each registered rule, bound to an env's navigator, scale and
+    """make_baseline builds each registered rule, bound to an env's distance model, scale and
     noise when given one (a simulator or an env); the rest is keyword-only; an unknown
     name lists mpdm, random and rbts."""
     assert {"mpdm", "rbts", "random"} <= set(BASELINES)
@@ -321,7 +336,7 @@ def test_make_baseline() -> None:
         for source in (env, sim):
             policy = make_baseline(name, env=source)
             assert type(policy) is cls
-            assert policy.navigator is sim.navigator
+            assert policy.distance_model is sim.distance_model
             assert policy.scale == 4.0
             assert policy.noise_mean == sim.config.noise_mean
     with pytest.raises(TypeError):

@@ -29,7 +29,7 @@ def test_both_builders_hold_the_same_decision(navigator: str) -> None:
             continue
         fast = RuleInput.of_sim(sim, RULE_NEEDS)
         read = RuleInput.of_observation(
-            obs, RULE_NEEDS, navigator=sim.navigator, scale=sim.layout.scale,
+            obs, RULE_NEEDS, distance_model=sim.distance_model, scale=sim.layout.scale,
             noise_mean=sim.config.noise_mean, reader="test",
         )  # fmt: skip
         mask = fast.mask
@@ -66,12 +66,12 @@ def test_the_observation_path_names_what_it_lacks() -> None:
     env = warehouse_v1.env(num_robots=3, num_tasks=5, observation="compact")
     env.reset(seed=0)
     obs = env.observe(env.agent_selection)
-    with pytest.raises(ConfigError, match=r"r1 on observations needs the env's navigator and "
-                       r"noise mean: make_baseline\('r1', env=env\)"):  # fmt: skip
+    with pytest.raises(ConfigError, match=r"r1 on observations needs the env's distance model "
+                       r"and noise mean: make_baseline\('r1', env=env\)"):  # fmt: skip
         RuleInput.of_observation(obs, ("distances", "noise_mean"), reader="r1")
-    nav = env.unwrapped.sim.navigator
+    nav = env.unwrapped.sim.distance_model
     with pytest.raises(ConfigError, match=r"r2 reads robots.*observation=.full."):
-        RuleInput.of_observation(obs, ("robot",), navigator=nav, reader="r2")
+        RuleInput.of_observation(obs, ("robot",), distance_model=nav, reader="r2")
 
 
 def test_free_times_restore_whole_milliseconds() -> None:

@@ -27,7 +27,7 @@ pytestmark = pytest.mark.unit
 
 
 def _lookahead(sim: WarehouseSim, horizon: int) -> Lookahead:
-    return Lookahead(sim.navigator, sim.layout.scale, horizon=horizon)
+    return Lookahead(sim.distance_model, sim.layout.scale, horizon=horizon)
 
 
 # ----------------------------------------------------------------- lookahead
@@ -47,7 +47,7 @@ def test_lookahead_horizon_zero_is_mpdm(sim: WarehouseSim) -> None:
 
 def _reference_costs(sim: WarehouseSim, horizon: int) -> np.ndarray:
     """The rule as stated, one candidate and one robot at a time (no vectorisation)."""
-    nav, mean = sim.navigator, sim.config.noise_mean
+    nav, mean = sim.distance_model, sim.config.noise_mean
     out = np.full(sim.queue_len, np.inf)
     for slot in np.flatnonzero(sim.queue_mask):
         free, cells = sim.robot_free_at.copy(), sim.robot_xy.copy()
@@ -85,7 +85,7 @@ def test_lookahead_costs_match_the_rule_as_stated(setting: str, horizon: int) ->
         first = sim.robot_distances()
         from rtaw_marl.policies.lookahead import rollout_distances
 
-        ends = rollout_distances(sim.navigator, sim.robot_xy, sim.queue_rows, sim.queue_mask)
+        ends = rollout_distances(sim.distance_model, sim.robot_xy, sim.queue_rows, sim.queue_mask)
         got = lookahead_costs(
             first, ends, sim.robot, sim.robot_free_at, sim.time, sim.queue_length,
             sim.queue_mask, horizon, sim.config.noise_mean,
@@ -104,7 +104,7 @@ def test_lookahead_costs_match_the_rule_as_stated(setting: str, horizon: int) ->
 def test_hungarian_takes_its_match_by_brute_force() -> None:
     """On small states the free robot's task is its task in an optimal assignment."""
     sim = random_sim("astar", SETTINGS["astar-shelves"][1], num_robots=3, queue_len=3)
-    policy = Hungarian(sim.navigator)
+    policy = Hungarian(sim.distance_model)
     for seed in range(3):
         sim.reset(seed)
         policy.reset(seed)

@@ -281,7 +281,8 @@ def test_sim_config_validation(kwargs: dict[str, object], match: str) -> None:
 
 
 def test_sim_construction_errors() -> None:
-    """Mismatched navigator, too many robots, unknown env keys and blocked starts are errors."""
+    """Mismatched distance model, too many robots, unknown env keys and blocked starts are
+    errors."""
     layout = open_grid(3, 3)
     with pytest.raises(ConfigError, match="different layout"):
         WarehouseSim(SimConfig(), layout, EuclideanDistance(open_grid(3, 3)), RandomTasks())
@@ -296,6 +297,18 @@ def test_sim_construction_errors() -> None:
     sim = WarehouseSim(config, blocked, EuclideanDistance(blocked), RandomTasks())
     with pytest.raises(LayoutError, match=r"start of robot 0 at \(x=1, y=1\) is on an obstacle"):
         sim.reset(0)
+
+
+def test_navigator_is_a_deprecated_alias_of_distance_model(
+    poc_sim: Callable[..., WarehouseSim],
+) -> None:
+    """``sim.navigator`` still returns the distance model, with one ``DeprecationWarning``."""
+    sim = poc_sim()
+    with pytest.warns(DeprecationWarning, match=r"use \.distance_model") as caught:
+        model = sim.navigator
+    assert model is sim.distance_model
+    assert isinstance(model, EuclideanDistance)
+    assert len(caught) == 1
 
 
 def test_unreachable_tasks_rejected_at_reset() -> None:

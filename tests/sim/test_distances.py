@@ -233,8 +233,9 @@ def test_unreachable_pairs_raise() -> None:
     assert nav.distance(np.array([[3, 0]]), np.array([[5, 2]]))[0] == 4.0
 
 
-def test_make_navigator() -> None:
-    """make_navigator builds the named class; an unknown name lists the registered ones."""
+def test_navigator_option_builds_its_distance_model() -> None:
+    """A navigator option's distance_model builds the named class; an unknown name lists the
+    registered ones."""
     layout = open_grid(4, 4)
     assert isinstance(navigator_option("astar").distance_model(layout), GridDistance)
     assert isinstance(navigator_option("direct").distance_model(layout), EuclideanDistance)

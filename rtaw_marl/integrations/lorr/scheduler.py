@@ -123,18 +123,18 @@ class PolicyScheduler:
             The cells whose fields were computed within ``budget_s`` seconds.
         """
         file_tasks = getattr(self.sim.stream, "tasks", None)
-        navigator = self.sim.navigator
-        if file_tasks is None or not hasattr(navigator, "fields"):
+        distance_model = self.sim.distance_model
+        if file_tasks is None or not hasattr(distance_model, "fields"):
             return 0
         first = np.asarray(file_tasks[: 2 * self.sim.queue_len]).reshape(-1, 2)
         _, at = np.unique(first[:, 1] * (1 << 20) + first[:, 0], return_index=True)
         cells = first[np.sort(at)]
         # Three quarters of the field cache at most: preloading must not evict itself.
-        cells = cells[: max(0, 3 * getattr(navigator, "_capacity", len(cells)) // 4)]
+        cells = cells[: max(0, 3 * getattr(distance_model, "_capacity", len(cells)) // 4)]
         deadline = self.clock() + budget_s
         done = 0
         while done < len(cells) and self.clock() < deadline:
-            navigator.fields(cells[done : done + 32])
+            distance_model.fields(cells[done : done + 32])
             done = min(done + 32, len(cells))
         return done
 
@@ -277,7 +277,7 @@ class PolicyScheduler:
     def _distance(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         if not len(a):
             return np.zeros(0)
-        return self.sim.navigator.distance(self._xy(a), self._xy(b))
+        return self.sim.distance_model.distance(self._xy(a), self._xy(b))
 
 
 def stats_dict(stats: SchedulerStats) -> Mapping[str, object]:

@@ -59,8 +59,8 @@ class FleetExecutor(Executor):
             raise ConfigError(f"executor {self.name!r} is not bound to a simulator")
         return self._fleet
 
-    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
-        del navigator  # planners use the grid; the policy keeps the navigator's distances
+    def bind(self, config: SimSettings, layout: Layout, distance_model: DistanceModel) -> None:
+        del distance_model  # planners use the grid; the policy keeps the model's distances
         if self._fleet is not None:
             raise ConfigError(
                 f"executor {self.name!r} already belongs to a simulator; make one per simulator"

@@ -131,18 +131,18 @@ class PIBTExecutor(Executor):
     def collision_aware(self) -> bool:
         return True
 
-    def bind(self, config: SimSettings, layout: Layout, navigator: DistanceModel) -> None:
+    def bind(self, config: SimSettings, layout: Layout, distance_model: DistanceModel) -> None:
         if self._bound:
             raise ConfigError("executor 'pibt' already belongs to a simulator; make one each")
         check_whole_seconds(config, self.name)
         self._bound = True
         self.index, self.cells, self.nbr = compact_graph(layout.obstacles)
-        # The navigator's fields are the same BFS distances: taking them from its cache
+        # The distance model's fields are the same BFS distances: taking them from its cache
         # shares each search with the policy's queries (a robot's decision is at the
         # cell whose field it just followed).
-        self._nav = navigator if isinstance(navigator, GridDistance) else None
-        if self._nav is not None:
-            self._padded = self._nav._padded_index(self.cells)
+        self._model = distance_model if isinstance(distance_model, GridDistance) else None
+        if self._model is not None:
+            self._padded = self._model._padded_index(self.cells)
         self.num_robots = config.num_robots
         # A fixed-horizon episode stops moving at T even when no robot is free then.
         self.horizon = config.horizon if config.episode_mode == "horizon" else None
@@ -258,11 +258,11 @@ class PIBTExecutor(Executor):
         )
 
     def _search(self, cell: int, out: np.ndarray) -> None:
-        if self._nav is None:
+        if self._model is None:
             bfs_compact(self.nbr, cell, out)
         else:
             x, y = self.cells[cell]
-            out[:] = self._nav.field(int(x), int(y))[self._padded]
+            out[:] = self._model.field(int(x), int(y))[self._padded]
 
     def _set_goal(self, robot: int, cell: int) -> None:
         if self.goal_field[robot] >= 0:

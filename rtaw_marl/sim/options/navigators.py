@@ -1,4 +1,4 @@
-"""DistanceModel options (the ``navigator`` config group): the distance model the policies
+"""Navigator options (the ``navigator`` config group): the distance model the policies
 observe, and the executor that moves the robots."""
 
 from __future__ import annotations

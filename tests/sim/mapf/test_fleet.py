@@ -191,17 +191,18 @@ def test_executor_parameters_are_explicit_and_checked() -> None:
 
 
 def test_registry_builds_astar_plus_the_executor_with_its_parameters() -> None:
-    """``sipp``/``cbs`` specs: an A* navigator and the executor with exactly the values given."""
+    """``sipp``/``cbs`` specs: an A* distance model and the executor with exactly the values
+    given."""
     env = {"num_robots": 2, "num_tasks": 2, "noise_mean": 0.0, "noise_var": 0.0}
     sim = build_sim(
         SimSpec.of(env, "open", {"name": "cbs", "time_limit": 1.5, "max_nodes": 7}, "random")
     )
-    assert isinstance(sim.navigator, GridDistance)
+    assert isinstance(sim.distance_model, GridDistance)
     assert isinstance(sim.executor, CBSExecutor)
     assert (sim.executor.time_limit, sim.executor.max_nodes) == (1.5, 7)
     assert sim.executor.fleet.max_nodes == 7
     sim = build_sim(SimSpec.of(env, "open", "sipp", "random"))
-    assert isinstance(sim.navigator, GridDistance)
+    assert isinstance(sim.distance_model, GridDistance)
     assert isinstance(sim.executor, SIPPExecutor)
     assert sim.executor.time_limit == 10.0
     defaults = navigator_option("cbs").executor()

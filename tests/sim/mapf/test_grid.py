@@ -51,7 +51,7 @@ def test_neighbours_are_free_and_ordered_right_left_down_up() -> None:
     assert grid.cell(0, 1) not in grid.neighbours(grid.cell(4, 0))
 
 
-def test_fields_match_the_astar_navigator() -> None:
+def test_fields_match_the_astar_distance_model() -> None:
     layout = ShelvesLayoutConfig(width=20, height=14).build()
     grid, nav = Grid.from_layout(layout), GridDistance(layout)
     cells = layout.free_cells[::7]
@@ -64,7 +64,7 @@ def test_fields_match_the_astar_navigator() -> None:
     assert len(path) == grid.distance(a, b) + 1
     assert (path[0], path[-1]) == (a, b)
     assert all(q in grid.neighbours(p) for p, q in itertools.pairwise(path))
-    # The same route as the navigator's (same tie-breaking).
+    # The same route as the distance model's (same tie-breaking).
     np.testing.assert_array_equal(grid.xys(path), nav.path(tuple(cells[0]), tuple(cells[-1])))
 
 
