@@ -26,7 +26,7 @@ class Scenario:
 
     Attributes:
         name: The registry name (``scenario=NAME``).
-        title: Its label in result tables (the key of its rows in docs/data/*.json).
+        title: Its label in result tables (the key of its rows in benchmarks/data/*.json).
         description: One line, for listings and the generated YAML files.
         layout: A layout name or ``{"name": ..., **keys}`` mapping.
         navigator: A navigator name or mapping.
