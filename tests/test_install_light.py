@@ -184,6 +184,12 @@ def test_env_only_install_in_a_fresh_venv(tmp_path: Path) -> None:
     assert "episode ok" in episode.stdout
     where = run(code="import rtaw_marl; print(rtaw_marl.__file__)")
     assert where.stdout.startswith(str(venv)), where.stdout
+    # The tutorial's first block, verbatim: a shipped map from the installed wheel, no
+    # source tree and no ../shared.
+    tutorial = (ROOT / "docs" / "tutorial.md").read_text().split("```python\n")[1]
+    first = run(code=tutorial.split("```")[0])
+    assert first.returncode == 0, first.stderr
+    assert "random policy: TTD" in first.stdout
 
     for tool, extra in (("rtaw-train", "train"), ("rtaw-eval", "cli"), ("rtaw-render", "cli")):
         proc = run(bindir / tool)
@@ -199,6 +205,17 @@ def test_env_only_install_in_a_fresh_venv(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "22.74" in proc.stdout
     assert "18.46" in proc.stdout
+    # A shipped map and the user's own rule, from the installed copy.
+    (work / "my_rules.py").write_text(
+        "import numpy as np\n\n\ndef first(sim):\n"
+        "    return int(np.flatnonzero(sim.queue_mask)[0])\n"
+    )
+    proc = run(bindir / "rtaw-eval", "layout=file", "layout.path=builtin:usc_64.cfg",
+               "env.num_tasks=20", "policy=[mpdm,my_rules:first]", "seeds=[0]",
+               "progress=false", "output=r.json")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "| first |" in proc.stdout
+    assert (work / "r.csv").is_file()
     proc = run(bindir / "rtaw-eval", "scenario=poc", "policy=[pretrained]",
                "pretrained=shelves_astar_m10", "seeds=[0]", "progress=false")  # fmt: skip
     assert proc.returncode == 2, proc.stderr
