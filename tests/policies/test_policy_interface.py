@@ -35,7 +35,11 @@ def _make(name: str, env: Any) -> Policy:
 
 def _play_env(name: str, navigator: str, **options: Any) -> tuple[list[int], float]:
     env = warehouse_v1.env(navigator=navigator, **SIZE, **options)
-    policy = _make(name, env)
+    return _play(env, _make(name, env))
+
+
+def _play(env: Any, policy: Policy) -> tuple[list[int], float]:
+    """One episode of ``policy`` acting on ``env``'s observations: its actions and TTD."""
     env.reset(seed=SEED)
     policy.reset(SEED)
     actions: list[int] = []
@@ -98,16 +102,7 @@ def test_lookahead_on_k_candidates_agrees_both_ways() -> None:
     size = {**SIZE, "queue_len": 12}
     params = BaselinesConfig(lookahead_candidates=4)
     env = warehouse_v1.env(navigator="astar", **size)
-    policy = make_baseline("lookahead", env=env, params=params)
-    env.reset(seed=SEED)
-    policy.reset(SEED)
-    actions: list[int] = []
-    for _ in env.agent_iter():
-        obs, _, terminated, truncated, info = env.last()
-        action = None if terminated or truncated else policy.act(obs)
-        if action is not None:
-            actions.append(action)
-        env.step(action)
+    actions, ttd = _play(env, make_baseline("lookahead", env=env, params=params))
     sim = warehouse_v1.env(navigator="astar", **size).unwrapped.sim
     fast = make_baseline("lookahead", params=params)
     fast.reset(SEED)
@@ -117,7 +112,7 @@ def test_lookahead_on_k_candidates_agrees_both_ways() -> None:
         expected.append(fast.act_sim(sim))
         sim.step(expected[-1])
     assert actions == expected
-    assert info["ttd"] == sim.metrics().ttd
+    assert ttd == sim.metrics().ttd
 
 
 def test_the_default_noise_is_modelled() -> None:
