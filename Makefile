@@ -30,7 +30,7 @@ DEMO_RUN := runs/demo
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
 	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
-		frames=40960 eval.every_frames=20480 output_dir=$(DEMO_RUN)
+		frames=40960 selection.every_frames=20480 output_dir=$(DEMO_RUN)
 	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
 		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json

@@ -138,8 +138,8 @@ def sipp_finetune_command(
     return _command(
         [
             *sipp_setting(layout).overrides(), "model=rtaw_plus", "algo=ppo",
-            f"frames={start_frames + frames}", "eval.every_frames=20480",
-            f"eval.seeds=[{seeds}]", "seed=0", f"resume={base}", "resume_new_scenario=true",
+            f"frames={start_frames + frames}", "selection.every_frames=20480",
+            f"selection.seeds=[{seeds}]", "seed=0", f"resume={base}", "resume_new_scenario=true",
         ],
         run_dir,
     )  # fmt: skip
@@ -156,7 +156,7 @@ def reward_command(reward: str, run_dir: Path) -> list[str]:
         raise unknown_name("reward", reward, list(REWARDS))
     setting = [o for o in SCENARIOS["A_astar_m10"].overrides() if o != "tasks=designated"]
     return _command(
-        [*setting, "algo=ppo_fast", "frames=102400", "eval.every_frames=10240", "seed=0",
+        [*setting, "algo=ppo_fast", "frames=102400", "selection.every_frames=10240", "seed=0",
          f"env.reward={reward}"],
         run_dir,
     )  # fmt: skip

@@ -116,7 +116,12 @@ def bench_time_to_beat_mpdm(frames: int, every: int, algo: str) -> tuple[list[di
     """Train on the default scenario; evaluation history and MPDM's TTD."""
     from rtaw_marl.training.ppo import train
 
-    overrides = [f"frames={frames}", f"eval.every_frames={every}", f"algo={algo}", "progress=false"]
+    overrides = [
+        f"frames={frames}",
+        f"selection.every_frames={every}",
+        f"algo={algo}",
+        "progress=false",
+    ]
     cfg = to_typed(compose("train", overrides))
     with tempfile.TemporaryDirectory() as tmp:
         result = train(cfg, tmp)
@@ -138,7 +143,7 @@ def bench_end_to_end(
     from rtaw_marl.training.ppo import train
 
     overrides = [f"env.num_robots={m}", f"collector.workers={workers}", f"frames={frames}",
-                 f"eval.every_frames={frames // 2}", "progress=false",
+                 f"selection.every_frames={frames // 2}", "progress=false",
                  f"collector.backend={backend}"]  # fmt: skip
     if model == "rtaw_plus":
         overrides += RTAW_PLUS

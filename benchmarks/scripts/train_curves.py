@@ -33,9 +33,9 @@ CONFIGS: dict[str, list[str]] = {
     # The throughput-tuned default, with the paper's 4M-frame budget.
     "default": ["frames=4005888"],
     # The paper's hyperparameter table, at the shipped policies' budget.
-    "paper": ["algo=ppo_paper", "frames=102400", "eval.every_frames=10240"],
+    "paper": ["algo=ppo_paper", "frames=102400", "selection.every_frames=10240"],
     # The recipe of the shipped 102,400-frame policies (policy coefficient 1.0).
-    "zoo_recipe": ["algo=ppo_fast", "frames=102400", "eval.every_frames=10240",
+    "zoo_recipe": ["algo=ppo_fast", "frames=102400", "selection.every_frames=10240",
                    "collector.envs_per_worker=16"],
 }  # fmt: skip
 

@@ -27,7 +27,7 @@ def test_a_seed_of_an_ordinary_entry_is_its_recipe_with_the_seed(tmp_path: Path)
     cfg, shipped = typed(cmd), to_typed(compose("train", ZOO["C_astar_m10_plus"].overrides()))
     assert cfg.seed == 1
     assert (cfg.output_dir, cfg.progress) == (str(tmp_path / "run"), False)
-    for key in ("env", "layout", "navigator", "tasks", "model", "algo", "imitation", "eval"):
+    for key in ("env", "layout", "navigator", "tasks", "model", "algo", "imitation", "selection"):
         assert getattr(cfg, key) == getattr(shipped, key), key
     with pytest.raises(ConfigError, match="continues its base's own run"):
         variants.seed_command("C_astar_m10_long_plus", 1, tmp_path, tmp_path)
@@ -49,10 +49,10 @@ def test_a_curriculum_seed_continues_the_base_of_the_same_seed(monkeypatch, tmp_
     assert cfg.resume_new_scenario
     assert (cfg.env.num_robots, cfg.layout.width, cfg.tasks.name) == (500, 300, "random")
     assert cfg.frames == 286_720 + 163_840  # the shipped curriculum's budget from its base
-    assert min(cfg.eval.seeds) >= 1000  # selection never on the evaluation seeds
+    assert min(cfg.selection.seeds) >= 1000  # selection never on the evaluation seeds
     shipped = to_typed(compose("train", ZOO[name].overrides()))
-    assert (cfg.model, cfg.algo, cfg.env, cfg.eval) == (
-        shipped.model, shipped.algo, shipped.env, shipped.eval,
+    assert (cfg.model, cfg.algo, cfg.env, cfg.selection) == (
+        shipped.model, shipped.algo, shipped.env, shipped.selection,
     )  # fmt: skip
 
 
@@ -97,7 +97,7 @@ def test_sipp_finetune_continues_the_astar_policy_on_the_navigation_setting(tmp_
     assert cfg.frames == 245_760 + 81_920
     assert cfg.resume_new_scenario
     assert cfg.resume == f"{runs}/C_astar_m10_plus/checkpoints/best.pt"
-    assert min(cfg.eval.seeds) >= 1000  # selection never on the evaluation seeds
+    assert min(cfg.selection.seeds) >= 1000  # selection never on the evaluation seeds
     assert cfg.output_dir == str(tmp_path / "C")
     assert cfg.model.name == "rtaw_plus"
     # The setting of the navigators study's SIPP rows, which the runs are evaluated on.
@@ -110,7 +110,7 @@ def test_the_reward_ablation_trains_rtaw_on_layout_a(reward: str, tmp_path: Path
     cfg = typed(variants.reward_command(reward, tmp_path / reward))
     assert cfg.env.reward == reward
     assert (cfg.layout.preset, cfg.navigator.name, cfg.env.num_robots) == ("A", "astar", 10)
-    assert (cfg.frames, cfg.eval.every_frames, cfg.seed, cfg.model.name) == (
+    assert (cfg.frames, cfg.selection.every_frames, cfg.seed, cfg.model.name) == (
         102_400, 10_240, 0, "rtaw",
     )  # fmt: skip
     with pytest.raises(ConfigError, match="unknown reward"):

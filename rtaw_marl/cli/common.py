@@ -22,6 +22,7 @@ from rtaw_marl.cli.completion import narrowed_completion
 from rtaw_marl.config import (
     CONF_DIR,
     check_overrides,
+    check_renamed,
     compose,
     config_error,
     register_configs,
@@ -80,6 +81,8 @@ def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable
         # Let composition errors reach this frame instead of Hydra's own report.
         os.environ["HYDRA_FULL_ERROR"] = "1"
         try:
+            # An old key (eval.every_frames) names its new one, before Hydra's "not in struct".
+            check_renamed(config_name, sys.argv[1:])
             if _help_asked(sys.argv[1:]):
                 _print_help(config_name, sys.argv[1:])
                 return

@@ -16,9 +16,18 @@ from omegaconf.errors import OmegaConfBaseException
 from rtaw_marl.config.help import register_help
 from rtaw_marl.config.store import CONF_DIR, register_configs
 from rtaw_marl.errors import ConfigError, RtawError, did_you_mean
+from rtaw_marl.training.config import renamed_key
 from rtaw_marl.utils.plain import as_plain
 
-__all__ = ["CONF_DIR", "as_plain", "check_overrides", "compose", "config_error", "to_typed"]
+__all__ = [
+    "CONF_DIR",
+    "as_plain",
+    "check_overrides",
+    "check_renamed",
+    "compose",
+    "config_error",
+    "to_typed",
+]
 
 
 def compose(
@@ -34,6 +43,7 @@ def compose(
     """
     register_configs()
     register_help()
+    check_renamed(config_name, overrides)
     try:
         with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
             cfg = hydra_compose(
@@ -80,6 +90,26 @@ def check_overrides(cfg: DictConfig, overrides: Sequence[str]) -> None:
         if isinstance(value, str) and "${" in value:
             continue  # an interpolation: its result is typed when it resolves
         raise ConfigError(f"{key} must be true or false, got {value!r}")
+
+
+def check_renamed(config_name: str, overrides: Sequence[str]) -> None:
+    """Refuse a key that was renamed, naming its new name: ``rtaw-train
+    eval.every_frames=1024`` is ``selection.every_frames`` now
+    (:data:`rtaw_marl.training.config.RENAMED`). Checked before composing, whose own
+    error would only say the key is unknown.
+
+    Raises:
+        ConfigError: An override sets (or adds, or deletes) a renamed key.
+    """
+    if config_name != "train":
+        return
+    for text in overrides:
+        if text.startswith("-") or ("=" not in text and not text.startswith("~")):
+            continue
+        key = text.partition("=")[0].lstrip("~+").partition("@")[0].strip()
+        message = renamed_key(key)
+        if message is not None:
+            raise ConfigError(message)
 
 
 def _override_key(text: str) -> str | None:

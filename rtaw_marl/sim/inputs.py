@@ -30,7 +30,7 @@ __all__ = [
 #: 0-999 for larger studies) and checkpoint selection (1000-1999). No training episode
 #: ever uses one (:func:`training_seed`, :func:`draw_training_seed`).
 RESERVED_SEEDS = 2000
-#: The first checkpoint-selection seed (training's ``eval.seeds``); evaluation seeds
+#: The first checkpoint-selection seed (training's ``selection.seeds``); evaluation seeds
 #: (``rtaw-eval``, the tables) lie below it.
 SELECTION_SEEDS = 1000
 #: Training episode seeds lie in ``RESERVED_SEEDS .. TRAINING_SEED_END - 1``.

@@ -37,7 +37,7 @@ except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.models.checkpoint import Actor, Critic, load_checkpoint, plain_model, save_checkpoint
-from rtaw_marl.training.config import TrainConfig
+from rtaw_marl.training.config import TrainConfig, upgrade_config
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.plain import as_plain
 
@@ -98,14 +98,14 @@ class Checkpoints:
         if better:
             save_checkpoint(self.best, payload)
         save_checkpoint(self.last, payload)
-        if self.cfg.eval.keep > 1:
+        if self.cfg.selection.keep > 1:
             self._keep_top(payload, history)
 
     def _keep_top(self, payload: dict[str, Any], history: list[dict[str, float]]) -> None:
-        """``top/<frames>.pt`` for the ``eval.keep`` best evaluations of ``history`` (ties:
+        """``top/<frames>.pt`` for the ``selection.keep`` best evaluations of ``history`` (ties:
         the earlier), weights only; a file that drops out of them is removed. Decided
         from the history alone, so a resumed run keeps the same files."""
-        top = sorted(history, key=lambda r: (r["ttd"], r["frames"]))[: self.cfg.eval.keep]
+        top = sorted(history, key=lambda r: (r["ttd"], r["frames"]))[: self.cfg.selection.keep]
         kept = {top_name(int(r["frames"])) for r in top}
         folder = self.last.parent / "top"
         name = top_name(self.progress.frames)
@@ -134,13 +134,13 @@ class Checkpoints:
             "frames": progress.frames,
             "iteration": progress.iteration,
             "best_ttd": progress.best_ttd,
-            "eval": row,
+            "eval": row,  # the evaluation's own row (its TTDs), not the selection config
             "history": list(history),
         }
 
 
 def top_name(frames: int) -> str:
-    """The file name of the kept checkpoint at ``frames`` (``eval.keep``)."""
+    """The file name of the kept checkpoint at ``frames`` (``selection.keep``)."""
     return f"{frames:012d}.pt"
 
 
@@ -296,16 +296,19 @@ def check_training_payload(ckpt: dict[str, Any], path: Path) -> None:
 
 def scenario_changes(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
     """``["env.num_robots: 10 -> 100", ...]``: where two runs' scenarios differ (the
-    groups of :data:`SCENARIO_KEYS` and the evaluation seeds)."""
+    groups of :data:`SCENARIO_KEYS` and the selection seeds). Either config may be a
+    stored one under old names (an ``eval`` section: :func:`~rtaw_marl.training.config.
+    upgrade_config`)."""
+    old, new = upgrade_config(old), upgrade_config(new)
     changes = []
     for group in SCENARIO_KEYS:
         a, b = old.get(group, {}), new.get(group, {})
         for key in sorted(set(a) | set(b)):
             if a.get(key) != b.get(key):
                 changes.append(f"{group}.{key}: {a.get(key)!r} -> {b.get(key)!r}")
-    a, b = old.get("eval", {}).get("seeds"), new.get("eval", {}).get("seeds")
+    a, b = old.get("selection", {}).get("seeds"), new.get("selection", {}).get("seeds")
     if a != b:
-        changes.append(f"eval.seeds: {a} -> {b}")
+        changes.append(f"selection.seeds: {a} -> {b}")
     return changes
 
 

@@ -1,9 +1,16 @@
 """Typed options of ``rtaw-train``: the PPO algorithm, the collector, the periodic
-evaluation, and the whole run. Plain Python (no torch), registered with Hydra by
-:mod:`rtaw_marl.config.store`."""
+evaluation on the selection seeds (``selection``), and the whole run. Plain Python (no
+torch), registered with Hydra by :mod:`rtaw_marl.config.store`.
+
+``selection`` was called ``eval`` before (a word ``rtaw-eval`` keeps for itself): the
+shipped checkpoints and older runs record an ``eval`` section in their ``config`` and
+``eval.*`` overrides in their ``command``. :func:`upgrade_config` and
+:func:`upgrade_command` read those under today's names; :func:`renamed_key` names the new
+key of an old one typed on the command line."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,8 +25,11 @@ __all__ = [
     "ImitationConfig",
     "PPOConfig",
     "RayConfig",
+    "SelectionConfig",
     "TrainConfig",
-    "TrainEvalConfig",
+    "renamed_key",
+    "upgrade_command",
+    "upgrade_config",
 ]
 
 #: Values of ``device`` (the learner's).
@@ -145,8 +155,9 @@ class CollectorConfig:
 
 
 @dataclass(kw_only=True)
-class TrainEvalConfig:
-    """Greedy evaluation during training (``eval.*``).
+class SelectionConfig:
+    """Greedy evaluation during training on the selection seeds, which picks ``best.pt``
+    (``selection.*``; ``eval.*`` before).
 
     Attributes:
         every_frames: Evaluate against MPDM every this many frames.
@@ -164,17 +175,62 @@ class TrainEvalConfig:
     keep: int = 1
 
     def __post_init__(self) -> None:
-        check_fields(self, "eval.")
-        at_least(self, "eval.", 1, "every_frames", "keep")
+        check_fields(self, "selection.")
+        at_least(self, "selection.", 1, "every_frames", "keep")
         if not self.seeds:
-            raise ConfigError("eval.seeds must name at least one seed")
-        low = [s for s in seed_list(self.seeds, "eval.seeds") if s < SELECTION_SEEDS]
+            raise ConfigError("selection.seeds must name at least one seed")
+        low = [s for s in seed_list(self.seeds, "selection.seeds") if s < SELECTION_SEEDS]
         if low:
             raise ConfigError(
-                f"eval.seeds {low[:5]} are below {SELECTION_SEEDS}: selection seeds start at "
+                f"selection.seeds {low[:5]} are below {SELECTION_SEEDS}: selection seeds start at "
                 f"{SELECTION_SEEDS}; seeds 0-{SELECTION_SEEDS - 1} are kept for evaluation, "
                 "which must not choose checkpoints"
             )
+
+
+#: The old name of :class:`SelectionConfig` (deprecated; the key was ``eval``).
+TrainEvalConfig = SelectionConfig
+
+#: Sections of ``rtaw-train``'s config renamed since: old name -> new name, and what the
+#: new one is (the one-line error for an old key, :func:`renamed_key`).
+RENAMED = {"eval": ("selection", "the selection seeds' evaluation during training")}
+
+
+def renamed_key(key: str) -> str | None:
+    """The one-line error for a key of ``rtaw-train`` that was renamed (``eval.seeds``:
+    ``eval.seeds is now selection.seeds (...)``); ``None`` for any other key."""
+    head, dot, rest = key.partition(".")
+    if head not in RENAMED:
+        return None
+    new, what = RENAMED[head]
+    return f"{key} is now {new}{dot}{rest} ({what})"
+
+
+def upgrade_config(config: Mapping[str, Any]) -> dict[str, Any]:
+    """A stored training config (a checkpoint's ``config``) under today's names: an old
+    ``eval`` section is ``selection`` (the shipped checkpoints and older runs say
+    ``eval``). A config already under today's names comes back as it was (a copy)."""
+    out = dict(config)
+    for old, (new, _) in RENAMED.items():
+        if old in out:
+            section = out.pop(old)
+            out.setdefault(new, section)
+    return out
+
+
+def upgrade_command(command: Sequence[str]) -> list[str]:
+    """A recorded command (a checkpoint's ``command``) spelled with today's keys:
+    ``eval.every_frames=40960`` is ``selection.every_frames=40960``; anything else is
+    kept as it was."""
+    out = []
+    for arg in command:
+        key, sep, value = arg.partition("=")
+        head, dot, rest = key.partition(".")
+        bare = head.lstrip("+~")
+        if sep and dot and bare in RENAMED:
+            arg = f"{head[: len(head) - len(bare)]}{RENAMED[bare][0]}.{rest}={value}"
+        out.append(arg)
+    return out
 
 
 @dataclass(kw_only=True)
@@ -231,13 +287,14 @@ class TrainConfig(SimGroups):
             finds a GPU, else ``cpu``), ``cpu`` or ``cuda``. Collection and evaluation
             run on CPUs.
         collector: Collection settings.
-        eval: Periodic greedy evaluation settings.
+        selection: The periodic greedy evaluation on the selection seeds, which picks
+            the checkpoints (``eval`` before).
         imitation: The optional warm start by imitation.
         logger: Where the scalars go: a ``logger`` option (``csv``, ``tensorboard``,
             ``mlflow``, ``wandb``, ``none``; :mod:`rtaw_marl.training.loggers.config`) or
             its name.
         resume: A checkpoint to continue from (``last.pt``). It must hold the same
-            scenario (env, layout, navigator, tasks, eval seeds) and fewer frames
+            scenario (env, layout, navigator, tasks, selection seeds) and fewer frames
             than ``frames``.
         resume_new_scenario: Allow ``resume`` from a checkpoint of another scenario: its
             networks continue here, its best TTD and evaluation history are dropped
@@ -250,7 +307,7 @@ class TrainConfig(SimGroups):
             mode changed; :mod:`rtaw_marl.scenarios.mix`); every
             collector's batch holds ``collector.envs_per_worker / len(mix)`` simulators
             of each. Empty: the run's own scenario alone. The run's scenario still
-            picks the checkpoints (``eval.*``). Needs ``model=rtaw_plus`` with
+            picks the checkpoints (``selection.*``). Needs ``model=rtaw_plus`` with
             ``model.fleet_summary=true`` (or ``model.critic_fleet=false``).
         init_actor: Start the actor from the actor of this checkpoint file or shipped
             policy name (its weights only: the critic, the optimizer and the run's
@@ -265,7 +322,7 @@ class TrainConfig(SimGroups):
     torch_threads: int = 1
     device: str = "auto"
     collector: CollectorConfig = field(default_factory=CollectorConfig)
-    eval: TrainEvalConfig = field(default_factory=TrainEvalConfig)
+    selection: SelectionConfig = field(default_factory=SelectionConfig)
     imitation: ImitationConfig = field(default_factory=ImitationConfig)
     logger: Any = "csv"
     resume: str | None = None

@@ -3,7 +3,7 @@
 :func:`train` builds the learner (networks, ClipPPOLoss, GAE, Adam), the collector over
 batched simulators and the evaluator, then loops: for each collected batch, GAE under
 ``no_grad``, ``epochs`` passes of shuffled minibatches, weight sync to the collector,
-and every ``eval.every_frames`` a greedy evaluation against MPDM on the selection seeds
+and every ``selection.every_frames`` a greedy evaluation against MPDM on the selection seeds
 with checkpoints (last and best).
 """
 
@@ -124,7 +124,7 @@ class Estimate:
     BATCHES = 3
 
     def __init__(self, cfg: TrainConfig, frames: int) -> None:
-        self.total, self.every, self.start = cfg.frames, cfg.eval.every_frames, frames
+        self.total, self.every, self.start = cfg.frames, cfg.selection.every_frames, frames
         self.batch, self.batches, self.told = cfg.algo.frames_per_batch, 0, False
         self.rate = 0.0
 
@@ -208,7 +208,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     if cfg.resume:
         progress, history = resume(cfg, nets, learner.optim, run_dir)
         trim_csv_logs(run_dir / "logs", progress.frames)
-    evaluator = Evaluator(spec, [int(s) for s in cfg.eval.seeds], history, nets[0].in_keys)
+    evaluator = Evaluator(spec, [int(s) for s in cfg.selection.seeds], history, nets[0].in_keys)
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
     logger = build_logger(run_dir, cfg.logger, config=as_plain(cfg))
@@ -241,7 +241,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
         saver.save(row, evaluator.history)
         eval_s.append(time.perf_counter() - began)
 
-    next_eval = progress.frames + cfg.eval.every_frames
+    next_eval = progress.frames + cfg.selection.every_frames
     frames_at_start = progress.frames
     totals: dict[str, float] = {}
     # Ctrl-C stops between iterations, never inside an update (see deferred_interrupt).
@@ -262,7 +262,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
                 clock.lap("time/sync_s")
                 done = progress.frames >= cfg.frames
                 if progress.frames >= next_eval or done:
-                    next_eval += cfg.eval.every_frames
+                    next_eval += cfg.selection.every_frames
                     evaluate_and_save()
                 clock.lap("time/eval_checkpoint_s")
                 bar.update(data.numel())

@@ -23,6 +23,7 @@ from pathlib import Path
 from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.policies.pretrained.registry import SHIPPED
+from rtaw_marl.training.config import upgrade_config
 from rtaw_marl.training.zoo import RUNS, ZOO, recipe, rtaw_train, train_command
 from rtaw_marl.utils.atomic import atomic_write
 
@@ -138,7 +139,8 @@ def reselect(
     if not entry.second_stage:
         raise ConfigError(f"zoo entry {name!r} has no second selection stage")
     candidates = run_candidates(run_dir)
-    first = load_checkpoint(run_dir / "checkpoints" / "best.pt")["config"]["eval"]["seeds"]
+    stored = load_checkpoint(run_dir / "checkpoints" / "best.pt")["config"]
+    first = upgrade_config(stored)["selection"]["seeds"]  # "eval" in older runs
     result = second_stage(candidates, entry.second_stage, first_stage=first, workers=workers)
     for label, gain in result.gains.items():
         # A pooled difference is in percent already (its mean, low and high).

@@ -1,10 +1,10 @@
 """A second selection stage: a run's candidate checkpoints scored on fresh selection seeds.
 
-Training's evaluations (the first stage, ``eval.seeds``: 10 seeds of one setting) pick
+Training's evaluations (the first stage, ``selection.seeds``: 10 seeds of one setting) pick
 the best of many evaluations. The winner's gain there is biased upwards, the more so the
 flatter the curve (the winner's curse): the generalist's best of 31 evaluations was +2.2%
 over lookahead on its selection seeds and -2.1% on the evaluation seeds. The second stage
-plays each candidate (``checkpoints/top/*.pt`` kept by ``eval.keep``, else ``best.pt``
+plays each candidate (``checkpoints/top/*.pt`` kept by ``selection.keep``, else ``best.pt``
 and ``last.pt``) and the reference rule on *fresh* selection seeds
 (:data:`SECOND_STAGE_SEEDS`, disjoint from the first stage's), over several settings,
 and picks the candidate with the largest pooled paired gain. With few candidates and
@@ -71,7 +71,7 @@ class StageResult:
 
 
 def run_candidates(run_dir: Path) -> dict[str, Path]:
-    """A run's candidates: ``checkpoints/top/*.pt`` (``eval.keep``), else ``best.pt`` and
+    """A run's candidates: ``checkpoints/top/*.pt`` (``selection.keep``), else ``best.pt`` and
     ``last.pt`` (one when they hold the same frames), labelled ``frames_<n>``."""
     folder = Path(run_dir) / "checkpoints"
     files = sorted((folder / "top").glob("*.pt")) or [folder / "best.pt", folder / "last.pt"]

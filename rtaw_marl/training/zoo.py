@@ -94,7 +94,7 @@ class Recipe(shipped.Recipe):
             tail, warm = (), WARM_START
         return [
             *self.scenario_overrides(), f"model={self.model}", "algo=ppo", *warm,
-            f"frames={self.budget}", f"eval.every_frames={EVERY_FRAMES}", f"seed={self.seed}",
+            f"frames={self.budget}", f"selection.every_frames={EVERY_FRAMES}", f"seed={self.seed}",
             *tail,
         ]  # fmt: skip
 
@@ -105,8 +105,8 @@ class Recipe(shipped.Recipe):
         seeds = ",".join(map(str, CURRICULUM_SEEDS))
         return [
             *self.scenario_overrides(), f"model={self.model}", "algo=ppo",
-            f"frames={start_frames + self.frames}", f"eval.every_frames={EVERY_FRAMES}",
-            f"eval.seeds=[{seeds}]", f"seed={self.seed}",
+            f"frames={start_frames + self.frames}", f"selection.every_frames={EVERY_FRAMES}",
+            f"selection.seeds=[{seeds}]", f"seed={self.seed}",
             f"resume={checkpoint}", "resume_new_scenario=true",
         ]  # fmt: skip
 

@@ -98,15 +98,28 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
         """characters must be quoted, e.g. 'layout.path="/tmp/ü/map.txt"'""",
     ),
     ("train", ["seed=-1"], "seed must be an integer >= 0, got -1"),
-    ("train", ["eval.seeds=[-1]"], "eval.seeds[0] must be an integer >= 0, got -1"),
-    ("train", ["eval.seeds=[]"], "eval.seeds must name at least one seed"),
+    ("train", ["selection.seeds=[-1]"], "selection.seeds[0] must be an integer >= 0, got -1"),
+    ("train", ["selection.seeds=[]"], "selection.seeds must name at least one seed"),
     (
         "train",
-        ["eval.seeds=[1000,3]"],
-        "eval.seeds [3] are below 1000: selection seeds start at 1000; seeds 0-999 are kept "
+        ["selection.seeds=[1000,3]"],
+        "selection.seeds [3] are below 1000: selection seeds start at 1000; seeds 0-999 are kept "
         "for evaluation, which must not choose checkpoints",
     ),
     ("render", ["seed=-1"], "seed must be an integer >= 0, got -1"),
+    # Renamed keys: the old name says the new one (not "unknown key"), in a sweep too.
+    *[
+        (
+            "train",
+            old,
+            f"eval.{key} is now selection.{key} (the selection seeds' evaluation during training)",
+        )
+        for old, key in [
+            (["eval.every_frames=1024"], "every_frames"),
+            (["+eval.keep=2"], "keep"),
+            (["--multirun", "eval.seeds=[1000],[1001]"], "seeds"),
+        ]
+    ],
     # Numbers that are not numbers, or not integers.
     ("eval", ["layout.width=nan"], "config key 'layout.width': Value 'nan'"),
     ("eval", ["layout.width=10.7"], "config key 'layout.width': Value '10.7'"),
@@ -157,7 +170,7 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("train", ["collector.workers=0"], "collector.workers must be >= 1, got 0"),
     ("train", ["collector.envs_per_worker=0"], "collector.envs_per_worker must be >= 1, got 0"),
     ("train", ["algo.minibatch_size=0"], "algo.minibatch_size must be >= 1, got 0"),
-    ("train", ["eval.every_frames=0"], "eval.every_frames must be >= 1, got 0"),
+    ("train", ["selection.every_frames=0"], "selection.every_frames must be >= 1, got 0"),
     ("train", ["torch_threads=0"], "torch_threads must be >= 1, got 0"),
     (
         "train",

@@ -79,7 +79,7 @@ def test_every_app_composes_to_its_dataclass(app: str) -> None:
         "model.embed_dmi",
         "algo.lrr",
         "collector.worker",
-        "eval.seed",
+        "selection.seed",
         "frame",
     ],
 )
@@ -210,7 +210,7 @@ def test_every_parameter_reaches_the_simulator_from_rtaw_train(cli, built_specs,
     """Regression: training used to keep only navigator.name and drop its budgets."""
     result = cli(
         "train", *PARAMS, "frames=48", "algo.frames_per_batch=48", "algo.minibatch_size=16",
-        "collector.envs_per_worker=4", "eval.seeds=[1000]", "eval.every_frames=48",
+        "collector.envs_per_worker=4", "selection.seeds=[1000]", "selection.every_frames=48",
         f"output_dir={tmp_path / 'run'}", "progress=false",
     )  # fmt: skip
     assert result.code == 0, result.err

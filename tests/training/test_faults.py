@@ -26,7 +26,7 @@ from rtaw_marl.training.ppo import Estimate, _duration, train
 pytestmark = pytest.mark.integration
 
 TINY = [
-    "scenario=poc", "eval.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
+    "scenario=poc", "selection.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
 ]  # fmt: skip
 RTAW_TRAIN = Path(sys.executable).with_name("rtaw-train")
 posix = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
@@ -211,8 +211,8 @@ def test_a_damaged_resume_through_the_cli(cli, base_run: Path, tmp_path: Path) -
         (["frames=1024", "imitation.teacher=lookahead", "imitation.frames=1000"],
          "imitation.frames=1000 is not a whole number of imitation.rounds x "
          "collector.envs_per_worker = 16 (it is never rounded): use 992 or 1008"),
-        (["frames=1024", "eval.seeds=[1000,1001,1000]"],
-         "eval.seeds lists a seed more than once: 1000 (2 times); each seed is one "
+        (["frames=1024", "selection.seeds=[1000,1001,1000]"],
+         "selection.seeds lists a seed more than once: 1000 (2 times); each seed is one "
          "episode, list it once"),
     ],
 )  # fmt: skip

@@ -43,7 +43,7 @@ def test_poc_reaches_the_exhaustive_optimum(train_cfg, tmp_path: Path) -> None:
     """Paper appendix: optimum 17.94 (MPDM 22.74, RBTS 18.46); PPO finds it."""
     optimum = _poc_optimum()
     assert optimum == pytest.approx(17.936, abs=1e-3)
-    cfg = train_cfg(["scenario=poc", "frames=6144", "eval.every_frames=1024", "seed=0"])
+    cfg = train_cfg(["scenario=poc", "frames=6144", "selection.every_frames=1024", "seed=0"])
     result = train(cfg, tmp_path)
     assert result.history[0]["ttd"] > optimum + 0.5  # the untrained policy is not optimal
     assert result.best_ttd == pytest.approx(optimum, abs=1e-3)
@@ -85,7 +85,7 @@ def _prob_short_task(actor_state: dict, model_config: RTAWConfig | dict) -> floa
 
 def test_two_task_setting_beats_mpdm_by_45_percent(train_cfg, tmp_path: Path) -> None:
     """Paper: 49.9% below MPDM with 10 robots. Trained policy: >= 45%, and it learned it."""
-    cfg = train_cfg(["scenario=two_task", "frames=20480", "eval.every_frames=10240", "seed=0"])
+    cfg = train_cfg(["scenario=two_task", "frames=20480", "selection.every_frames=10240", "seed=0"])
     untrained, _ = build_networks(cfg.model)
     before = _prob_short_task(untrained.state_dict(), cfg.model)
     result = train(cfg, tmp_path)
@@ -115,7 +115,7 @@ def test_rtaw_plus_warm_started_on_lookahead_beats_mpdm_on_held_out_seeds(
     cfg = train_cfg([
         "model=rtaw_plus", "algo=ppo", "env.num_tasks=100", "imitation.teacher=lookahead",
         "imitation.frames=8192", "imitation.rounds=2", "algo.frames_per_batch=2048",
-        "algo.minibatch_size=512", "frames=2048", "eval.every_frames=2048", "seed=0",
+        "algo.minibatch_size=512", "frames=2048", "selection.every_frames=2048", "seed=0",
     ])  # fmt: skip
     result = train(cfg, tmp_path)
     sim = build_sim(train_cfg(["model=rtaw_plus", "env.num_tasks=300"]).sim_spec())

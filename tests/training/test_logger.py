@@ -34,9 +34,9 @@ pytestmark = pytest.mark.unit
 #: The paper's proof of concept, two PPO batches of 256 decisions after a four-round
 #: imitation warm start, evaluated at 0, 256 and 512 frames.
 TINY = [
-    "scenario=poc", "frames=512", "eval.every_frames=256", "algo.frames_per_batch=256",
+    "scenario=poc", "frames=512", "selection.every_frames=256", "algo.frames_per_batch=256",
     "algo.minibatch_size=128", "algo.epochs=1", "collector.envs_per_worker=4",
-    "eval.seeds=[1000]", "imitation.teacher=lookahead", "imitation.frames=64",
+    "selection.seeds=[1000]", "imitation.teacher=lookahead", "imitation.frames=64",
     "imitation.rounds=4",
 ]  # fmt: skip
 

@@ -19,9 +19,9 @@ pytestmark = pytest.mark.integration
 
 #: The paper's proof of concept: two PPO batches of 256 decisions, evaluated at 0 and 512.
 TINY = [
-    "scenario=poc", "frames=512", "eval.every_frames=512", "algo.frames_per_batch=256",
+    "scenario=poc", "frames=512", "selection.every_frames=512", "algo.frames_per_batch=256",
     "algo.minibatch_size=128", "algo.epochs=1", "collector.envs_per_worker=4",
-    "eval.seeds=[1000]",
+    "selection.seeds=[1000]",
 ]  # fmt: skip
 
 
@@ -44,7 +44,7 @@ def test_mlflow_run_in_a_local_store_holds_metrics_and_the_config(
     params = run.data.params
     assert params["algo.lr"] == str(result_cfg_lr(train_cfg))
     assert params["env.num_robots"] == "2"
-    assert params["eval.seeds"] == "[1000]"
+    assert params["selection.seeds"] == "[1000]"
     assert params["logger.name"] == "mlflow"
     assert params["model.name"] == "rtaw"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]

@@ -50,7 +50,7 @@ def test_rtaw_train_on_a_lorr_problem_with_pibt(train_cfg, tmp_path: Path) -> No
     evaluates on the same scenario with every PIBT episode passing the checker."""
     problem = _tiny_lorr_problem(tmp_path)
     overrides = ["scenario=lorr", f"tasks.problem={problem}", "env.horizon=60",
-                 "frames=1024", "eval.every_frames=512", "collector.envs_per_worker=4",
+                 "frames=1024", "selection.every_frames=512", "collector.envs_per_worker=4",
                  "model=rtaw_plus"]  # fmt: skip
     result = train(train_cfg(overrides), tmp_path / "run")
     assert result.frames == 1024

@@ -29,7 +29,7 @@ def test_a_mix_trains_one_policy_for_every_member(train_cfg, tmp_path: Path) -> 
             "scenario=open60_direct_m10", "env.num_tasks=40", "model=rtaw_plus",
             "model.fleet_summary=true", f"mix=[{','.join(MIX)}]", "collector.envs_per_worker=4",
             "algo.frames_per_batch=256", "algo.minibatch_size=128", "frames=512",
-            "eval.every_frames=256", "eval.seeds=[1000,1001]",
+            "selection.every_frames=256", "selection.seeds=[1000,1001]",
             "imitation.teacher=lookahead", "imitation.frames=128", "imitation.rounds=2",
         ]
     )  # fmt: skip
@@ -56,8 +56,8 @@ def test_init_actor_starts_from_a_shipped_actor(train_cfg, tmp_path: Path) -> No
             "scenario=C_astar_m10", "env.num_tasks=40", "model=rtaw_plus",
             "model.fleet_summary=true", "init_actor=C_astar_m10_long_plus",
             "collector.envs_per_worker=4", "algo.frames_per_batch=256",
-            "algo.minibatch_size=128", "frames=256", "eval.every_frames=256",
-            "eval.seeds=[1000,1001]",
+            "algo.minibatch_size=128", "frames=256", "selection.every_frames=256",
+            "selection.seeds=[1000,1001]",
         ]
     )  # fmt: skip
     result = train(cfg, tmp_path)

@@ -18,9 +18,9 @@ pytestmark = pytest.mark.integration
 #: The smallest run that collects, updates (the replay buffer logs at its first fill)
 #: and evaluates: the paper's proof of concept, two batches of 256 decisions.
 TINY = [
-    "scenario=poc", "frames=512", "eval.every_frames=512", "algo.frames_per_batch=256",
+    "scenario=poc", "frames=512", "selection.every_frames=512", "algo.frames_per_batch=256",
     "algo.minibatch_size=128", "algo.epochs=1", "collector.envs_per_worker=4",
-    "eval.seeds=[1000]", "logger=none",
+    "selection.seeds=[1000]", "logger=none",
 ]  # fmt: skip
 
 

@@ -30,7 +30,7 @@ ray = pytest.importorskip("ray")
 #: Two actors of 4 simulators each; the paper's 512-frame batches (64 steps per actor).
 SMALL = [
     "scenario=poc", "collector=ray", "collector.workers=2", "collector.envs_per_worker=4",
-    "algo=ppo_paper", "eval.seeds=[1000,1001]", "eval.every_frames=512", "progress=false",
+    "algo=ppo_paper", "selection.seeds=[1000,1001]", "selection.every_frames=512", "progress=false",
 ]  # fmt: skip
 
 
@@ -128,7 +128,7 @@ def test_more_cpus_than_the_cluster_has_is_one_line(cli, ray_cluster, tmp_path: 
 @pytest.mark.slow
 def test_poc_reaches_the_exhaustive_optimum_through_ray(train_cfg, ray_cluster, tmp_path):
     """The local PoC test's settings (tests/training/test_learning.py), two Ray actors."""
-    cfg = train_cfg(["scenario=poc", "frames=6144", "eval.every_frames=1024", "seed=0",
+    cfg = train_cfg(["scenario=poc", "frames=6144", "selection.every_frames=1024", "seed=0",
                      "collector=ray", "collector.workers=2"])  # fmt: skip
     result = train(cfg, tmp_path)
     assert result.frames == 6144

@@ -22,7 +22,7 @@ from rtaw_marl.training.ppo import train
 pytestmark = pytest.mark.integration
 
 TINY = [
-    "scenario=poc", "eval.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
+    "scenario=poc", "selection.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
 ]  # fmt: skip
 RTAW_TRAIN = Path(sys.executable).with_name("rtaw-train")
 
@@ -196,4 +196,23 @@ def test_resume_from_a_checkpoint_older_than_a_model_key(train_cfg, tmp_path: Pa
     other = train_cfg([*TINY, "model=rtaw_plus", "model.critic_fleet=false", "frames=1024",
                        f"resume={old}"])  # fmt: skip
     with pytest.raises(ConfigError, match="differs from model"):
+        train(other, tmp_path / "c")
+
+
+def test_resume_from_a_run_that_says_eval_for_selection(train_cfg, tmp_path: Path) -> None:
+    """A run saved before ``eval`` was renamed ``selection`` (the shipped checkpoints
+    say ``eval`` too) resumes as the same scenario: its selection seeds are compared
+    under today's name, and its best and history are kept."""
+    first = train(train_cfg([*TINY, "frames=512"]), tmp_path / "a")
+    ckpt = load_checkpoint(first.last_checkpoint)
+    ckpt["config"]["eval"] = ckpt["config"].pop("selection")
+    ckpt["command"] = [
+        a.replace("selection.", "eval.", 1) if a.startswith("selection.") else a
+        for a in ckpt["command"]
+    ]
+    old = save_checkpoint(tmp_path / "old.pt", ckpt)
+    resumed = train(train_cfg([*TINY, "frames=1024", f"resume={old}"]), tmp_path / "b")
+    assert [row["frames"] for row in resumed.history] == [0, 512, 1024]
+    other = train_cfg([*TINY, "frames=1024", "selection.seeds=[1001]", f"resume={old}"])
+    with pytest.raises(ConfigError, match=r"selection.seeds: \[1000, .*\] -> \[1001\]"):
         train(other, tmp_path / "c")

@@ -1,4 +1,4 @@
-"""Selection without a winner's curse: ``eval.keep`` keeps the best evaluations'
+"""Selection without a winner's curse: ``selection.keep`` keeps the best evaluations'
 checkpoints, and a second stage scores them on fresh selection seeds."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from rtaw_marl.training.selection import run_candidates, second_stage
 pytestmark = pytest.mark.integration
 
 TINY = [
-    "scenario=poc", "eval.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
+    "scenario=poc", "selection.every_frames=512", "collector.envs_per_worker=4", "algo=ppo_paper",
 ]  # fmt: skip
 
 
@@ -35,7 +35,7 @@ def test_keep_holds_the_k_best_evaluations_and_drops_the_others(
     scripted = iter([5.0, 3.0, 4.0, 1.0, 6.0])
     monkeypatch.setattr(evaluator_module, "greedy_ttd", lambda net, env, seeds: [next(scripted)])
     run = tmp_path / "run"
-    train(train_cfg([*TINY, "frames=2048", "eval.keep=2"]), run)
+    train(train_cfg([*TINY, "frames=2048", "selection.keep=2"]), run)
     top = sorted((run / "checkpoints" / "top").iterdir())
     assert [p.name for p in top] == ["000000000512.pt", "000000001536.pt"]
     for path, ttd in zip(top, (3.0, 1.0), strict=True):

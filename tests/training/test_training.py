@@ -26,7 +26,7 @@ from tests.training.conftest import POC_ENV, POC_LAYOUT
 pytestmark = pytest.mark.integration
 
 TINY = [
-    "scenario=poc", "frames=1024", "eval.every_frames=512", "collector.envs_per_worker=4",
+    "scenario=poc", "frames=1024", "selection.every_frames=512", "collector.envs_per_worker=4",
     "algo=ppo_paper",
 ]  # fmt: skip
 
@@ -42,7 +42,7 @@ def test_resume_continues_frames_and_reloads_parameters(train_cfg, tmp_path: Pat
     # Reloaded parameters reproduce the checkpoint's own evaluation exactly.
     actor, _ = build_networks(ckpt["model_config"])
     actor.load_state_dict(ckpt["model"]["actor"])
-    seeds = list(ckpt["config"]["eval"]["seeds"])
+    seeds = list(ckpt["config"]["selection"]["seeds"])
     assert seeds == list(range(1000, 1010))  # selection seeds, never the evaluation seeds
     env = BatchedWarehouseEnv(SimSpec.of(**_poc_spec()), num_envs=len(seeds), seed=0)
     ttd = sum(greedy_ttd(actor, env, seeds)) / len(seeds)
@@ -53,7 +53,7 @@ def test_resume_continues_frames_and_reloads_parameters(train_cfg, tmp_path: Pat
             [
                 *TINY[:1],
                 "frames=2048",
-                "eval.every_frames=512",
+                "selection.every_frames=512",
                 "collector.envs_per_worker=4",
                 f"resume={first.last_checkpoint}",
             ]
@@ -85,7 +85,7 @@ def test_same_seed_same_warm_started_run(train_cfg, tmp_path: Path) -> None:
     """Imitation included: the teacher's tie-breaking follows the run's seed (lookahead
     ties often on the default scenario, where every robot starts free at time 0)."""
     warm = ["model=rtaw_plus", "imitation.teacher=lookahead", "imitation.frames=1024",
-            "imitation.rounds=2", "env.num_tasks=60", "frames=512", "eval.every_frames=512",
+            "imitation.rounds=2", "env.num_tasks=60", "frames=512", "selection.every_frames=512",
             "algo.frames_per_batch=512", "algo.minibatch_size=128"]  # fmt: skip
     a = train(train_cfg(warm), tmp_path / "a")
     b = train(train_cfg(warm), tmp_path / "b")
@@ -107,7 +107,7 @@ def test_refuses_to_overwrite_a_run(train_cfg, tmp_path: Path) -> None:
 def test_interop_route_trains_rtaw_plus(train_cfg, tmp_path: Path) -> None:
     """RTAW+ reads the relational entries of the PettingZoo observation through the
     wrapper's nested keys, and trains (with an imitation warm start)."""
-    overrides = ["scenario=poc", "frames=512", "eval.every_frames=512", "interop=true",
+    overrides = ["scenario=poc", "frames=512", "selection.every_frames=512", "interop=true",
                  "model=rtaw_plus", "imitation.teacher=lookahead",
                  "imitation.frames=64"]  # fmt: skip
     result = train(train_cfg(overrides), tmp_path)
@@ -121,7 +121,7 @@ def test_interop_route_trains_rtaw_plus(train_cfg, tmp_path: Path) -> None:
 def test_rtaw_plus_trains_with_a_critic_blind_to_the_fleet(train_cfg, tmp_path, interop) -> None:
     """The ``model.critic_fleet=false`` ablation trains on both routes and its checkpoint
     rebuilds the same critic."""
-    overrides = ["scenario=poc", "frames=512", "eval.every_frames=512", f"interop={interop}",
+    overrides = ["scenario=poc", "frames=512", "selection.every_frames=512", f"interop={interop}",
                  "model=rtaw_plus", "model.critic_fleet=false"]  # fmt: skip
     result = train(train_cfg(overrides), tmp_path)
     ckpt = load_checkpoint(result.last_checkpoint)
@@ -133,7 +133,7 @@ def test_rtaw_plus_trains_with_a_critic_blind_to_the_fleet(train_cfg, tmp_path, 
 def test_interop_route_trains_through_pettingzoo_wrapper(train_cfg, tmp_path: Path) -> None:
     """A few PPO updates through torchrl's PettingZooWrapper with loss_mask_key."""
     result = train(
-        train_cfg(["scenario=poc", "frames=1024", "eval.every_frames=512", "interop=true"]),
+        train_cfg(["scenario=poc", "frames=1024", "selection.every_frames=512", "interop=true"]),
         tmp_path,
     )
     torch.manual_seed(0)  # train() seeds torch with cfg.seed=0 before building the networks
@@ -150,7 +150,7 @@ def test_two_worker_collector(train_cfg, tmp_path: Path) -> None:
             [
                 "scenario=poc",
                 "frames=1024",
-                "eval.every_frames=1024",
+                "selection.every_frames=1024",
                 "collector.workers=2",
                 "collector.envs_per_worker=4",
             ]
@@ -269,7 +269,7 @@ def test_multirun_sweep_trains_each_job_into_its_own_folder(cli, tmp_path: Path,
     result = cli(
         "train", "--multirun", "seed=0,1", "scenario=poc", "frames=256",
         "algo.frames_per_batch=256", "algo.minibatch_size=64", "collector.envs_per_worker=4",
-        "eval.seeds=[1000]", "eval.every_frames=256", "progress=false",
+        "selection.seeds=[1000]", "selection.every_frames=256", "progress=false",
         f"hydra/launcher={launcher}", f"hydra.sweep.dir={tmp_path / 'sweep'}",
     )  # fmt: skip
     assert result.code == 0, result.err
@@ -283,7 +283,7 @@ def test_resumed_run_keeps_its_whole_evaluation_history(train_cfg, tmp_path: Pat
     """The checkpoint carries every evaluation, so a resumed run draws its whole curve."""
     first = train(train_cfg(TINY), tmp_path / "a")
     resumed = train(
-        train_cfg([*TINY[:1], "frames=2048", "eval.every_frames=512",
+        train_cfg([*TINY[:1], "frames=2048", "selection.every_frames=512",
                    "collector.envs_per_worker=4", f"resume={first.last_checkpoint}"]),
         tmp_path / "b",
     )  # fmt: skip

@@ -17,6 +17,7 @@ from rtaw_marl.policies.pretrained.recipes import RECIPES
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, SHIPPED, pretrained_path
 from rtaw_marl.scenarios import SCENARIOS
 from rtaw_marl.training.checkpoints import scenario_changes
+from rtaw_marl.training.config import upgrade_command, upgrade_config
 from rtaw_marl.training.zoo import (
     BUDGET,
     CURRICULUM_FRAMES,
@@ -59,11 +60,35 @@ def test_the_recipe_table_is_every_shipped_policy_and_names_real_scenarios() -> 
 
 @pytest.mark.parametrize("name", sorted(ZOO))
 def test_each_shipped_checkpoint_records_its_recipe(name: str) -> None:
-    """The recorded command is the recipe's, so the policy can be retrained exactly."""
+    """The recorded command is the recipe's, so the policy can be retrained exactly
+    (recorded with ``eval.*``, the old name of ``selection.*``: the same keys)."""
     ckpt = load_checkpoint(pretrained_path(name))
     overrides = ZOO[name].overrides()
-    assert ckpt["command"][1 : 1 + len(overrides)] == overrides
-    assert f"frames={ZOO[name].budget}" in ckpt["command"]
+    command = upgrade_command(ckpt["command"])
+    assert command[1 : 1 + len(overrides)] == overrides
+    assert f"frames={ZOO[name].budget}" in command
+
+
+def test_a_shipped_checkpoints_old_eval_section_reads_as_selection() -> None:
+    """The shipped checkpoints record ``selection`` under its old name, ``eval`` (config
+    and command): read under today's names, they are the recipe's own settings."""
+    ckpt = load_checkpoint(pretrained_path("A_astar_m10"))
+    assert "eval" in ckpt["config"]
+    assert "selection" not in ckpt["config"]
+    assert any(arg.startswith("eval.every_frames=") for arg in ckpt["command"])
+    stored = upgrade_config(ckpt["config"])
+    assert "eval" not in stored
+    recipe_cfg = as_plain(to_typed(compose("train", ZOO["A_astar_m10"].overrides())))
+    # (It predates selection.keep.)
+    assert stored["selection"] == {k: recipe_cfg["selection"][k] for k in ("every_frames", "seeds")}
+    # Its selection seeds compare under today's name (its env predates newer env keys).
+    changes = scenario_changes(ckpt["config"], recipe_cfg)
+    assert not [c for c in changes if c.startswith(("selection", "eval"))], changes
+    command = upgrade_command(ckpt["command"])
+    assert not any(arg.startswith("eval.") for arg in command)
+    assert to_typed(compose("train", command[1:])).selection.every_frames == 40_960
+    assert upgrade_config(stored) == stored  # today's names pass through
+    assert upgrade_command(command) == command
 
 
 @pytest.mark.parametrize("name", sorted(ZOO))
@@ -88,7 +113,7 @@ def test_curriculum_policies_continue_their_base_with_500_robots(name: str) -> N
     assert ckpt["config"]["resume"] == f"runs/pretrained/{entry.base}/checkpoints/best.pt"
     assert entry.base_frames < ckpt["frames"] <= ckpt["config"]["frames"] == entry.budget
     assert entry.budget == entry.base_frames + CURRICULUM_FRAMES
-    assert min(ckpt["config"]["eval"]["seeds"]) >= 1000
+    assert min(upgrade_config(ckpt["config"])["selection"]["seeds"]) >= 1000
 
 
 @pytest.mark.parametrize("name", [n for n in STAGED if ZOO[n].stage == "continued"])
