@@ -40,10 +40,13 @@ __all__ = ["RULE_NEEDS", "RuleInput", "acting_row", "free_times"]
 #: The fields of :class:`RuleInput` a rule may ask for (its ``needs``); ``mask`` and
 #: ``scale`` are always there. The fast path always has a ``distance_model`` and a
 #: ``noise_mean``; needing them makes the observation path insist on them (a rule not
-#: bound to an env has neither).
+#: bound to an env has neither). ``robot`` is the acting robot's row as the observation
+#: path finds it (:func:`acting_row`) on both paths; ``own_row`` fills the same field with
+#: any row equal to it (the robot itself on the fast path, no search): enough for a rule to
+#: which equal rows are interchangeable (RBTS), not for a whole-fleet assignment.
 RULE_NEEDS = frozenset(
-    ("distance_model", "noise_mean", "own_distances", "distances", "robot", "robot_xy",
-     "free_in", "queue_rows")
+    ("distance_model", "noise_mean", "own_distances", "distances", "robot", "own_row",
+     "robot_xy", "free_in", "queue_rows")
 )  # fmt: skip
 
 
@@ -72,7 +75,9 @@ def acting_row(robots: np.ndarray, agent: np.ndarray) -> int:
     return int(np.all(robots == agent, axis=1).argmax())
 
 
-@dataclass(frozen=True)
+# Not frozen: a frozen dataclass sets each field through object.__setattr__, a cost paid
+# at every decision; the arrays are read, never written, by convention.
+@dataclass(slots=True)
 class RuleInput:
     """What a rule decides from (module docstring).
 
@@ -91,7 +96,8 @@ class RuleInput:
             slots: meaningless).
         distances: ``float64 [M, N]`` every robot's distance (from the cell where it
             will next be free) to each origin (empty slots: meaningless).
-        robot: The acting robot's row of the robot table (:func:`acting_row`).
+        robot: The acting robot's row of the robot table (:func:`acting_row`); with the
+            need ``own_row`` instead of ``robot``, any row equal to it.
         robot_xy: ``int64 [M, 2]`` the cell where each robot will next be free.
         free_in: ``float64 [M]`` time until each robot is free, 0 for robots idle now,
             as the observation holds it (:func:`free_times`).
@@ -122,7 +128,11 @@ class RuleInput:
         """
         needs = _checked(needs)
         scale = sim.layout.scale
-        robot = _acting_robot(sim) if "robot" in needs else None
+        robot = None
+        if "robot" in needs:
+            robot = _acting_robot(sim)
+        elif "own_row" in needs:
+            robot = int(sim.robot)
         free_in = None
         if "free_in" in needs:
             # The times as the observation's float32 column holds them, so that they are
@@ -184,8 +194,8 @@ class RuleInput:
         mask = np.asarray(observation["action_mask"], dtype=bool)
         # The distances are measured from the observed cells to the observed origins.
         tasks_needed = bool(needs & {"own_distances", "queue_rows", "distances"})
-        robots_needed = bool(needs & {"robot", "robot_xy", "free_in", "distances"})
-        agent_needed = "robot" in needs
+        robots_needed = bool(needs & {"robot", "own_row", "robot_xy", "free_in", "distances"})
+        agent_needed = bool(needs & {"robot", "own_row"})
         keys = [key for key, wanted in (("robots", robots_needed), ("tasks", tasks_needed),
                                         ("agent", agent_needed)) if wanted]  # fmt: skip
         features = read_features(observation, keys, reader) if keys else {}
@@ -229,8 +239,15 @@ def _acting_robot(sim: WarehouseSim) -> int:
 
 
 def _checked(needs: Iterable[str]) -> frozenset[str]:
-    # Rules pass frozensets: no copy on the hot path.
+    # Rules pass the same frozenset at every decision: checked once, then looked up.
+    if isinstance(needs, frozenset) and needs in _CHECKED:
+        return needs
     needs = needs if isinstance(needs, frozenset) else frozenset(needs)
     if not needs <= RULE_NEEDS:
         raise ValueError(f"unknown needs {sorted(needs - RULE_NEEDS)}; known: {sorted(RULE_NEEDS)}")
+    _CHECKED.add(needs)
     return needs
+
+
+#: The ``needs`` sets already checked (a rule's own, a handful per process).
+_CHECKED: set[frozenset[str]] = set()

@@ -40,7 +40,7 @@ __all__ = [
     "make_baseline",
 ]
 
-_Factory = Callable[[BaselinesConfig], "BaselinePolicy | Hindsight"]
+_Factory = Callable[[BaselinesConfig], "BaselinePolicy | BatchAssignment | Hindsight"]
 
 #: Every rule evaluated by name (``rtaw-eval policy=[...]``): its parameters -> the rule,
 #: not yet bound to an env (:func:`make_baseline` binds it).
@@ -64,7 +64,7 @@ _NETWORK = ("NetworkPolicy", "load_policy")
 
 def make_baseline(
     name: str, *, env: Any = None, params: BaselinesConfig | None = None
-) -> BaselinePolicy | Hindsight:
+) -> BaselinePolicy | BatchAssignment | Hindsight:
     """Build the rule registered as ``name``.
 
     ``make_baseline(name)`` is all evaluation needs: ``act_sim(sim)`` takes the

@@ -28,8 +28,6 @@ from typing import Any
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from rtaw_marl.decision.rule_input import RuleInput
-from rtaw_marl.policies.baselines import BaselinePolicy
 from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["BatchAssignment", "capped_costs", "match"]
@@ -75,14 +73,15 @@ def capped_costs(
     return dist + penalty * full[None, :]
 
 
-class BatchAssignment(BaselinePolicy):
+class BatchAssignment:
     """Min-cost matching of the robots free now to the queued tasks, with a soft cap of
-    robots per pickup region. It acts on the simulator only (:meth:`act_sim`): the
-    matching needs more than any observation holds.
+    robots per pickup region. It acts on the simulator only (:meth:`act_sim`), like the
+    ``hindsight`` reference: the matching needs what no observation holds (the robots
+    free in this timestep, the pickups robots are heading to), so it is not a
+    :class:`~rtaw_marl.policies.baselines.BaselinePolicy` deciding from a
+    :class:`~rtaw_marl.decision.rule_input.RuleInput`. Its choices are deterministic.
 
     Args:
-        distance_model: Unused (kept for the rules' signature).
-        scale: The observation length scale.
         region: Side of a pickup region, in cells.
         cap: Robots heading to one region before its tasks cost ``penalty`` more.
         penalty: That extra cost, in cells of travel.
@@ -93,15 +92,14 @@ class BatchAssignment(BaselinePolicy):
     name = "batch"
 
     def __init__(
-        self, distance_model: object = None, scale: float = 1.0, region: int = 8, cap: int = 4,
-        penalty: float = 20.0, max_batch: int = 256,
-    ) -> None:  # fmt: skip
-        super().__init__(None, scale)
+        self, region: int = 8, cap: int = 4, penalty: float = 20.0, max_batch: int = 256
+    ) -> None:
         self.region, self.cap, self.penalty = int(region), int(cap), float(penalty)
         self.max_batch = int(max_batch)
+        self.reset()
 
     def reset(self, seed: int | None = None) -> None:
-        super().reset(seed)
+        """Forget the last timestep's matching (the seed is unused: no random ties)."""
         self._plan: tuple[int, float, dict[int, int]] | None = None
 
     def act_sim(self, sim: WarehouseSim) -> int:
@@ -139,21 +137,10 @@ class BatchAssignment(BaselinePolicy):
         return int(slots[cols[me]])
 
     def act(self, observation: Mapping[str, Any]) -> int:
-        """Not available (:meth:`decide`).
+        """Not available: use :meth:`act_sim` (the class docstring says why).
 
         Raises:
             NotImplementedError: Always; use :meth:`act_sim` on the simulator.
-        """
-        raise NotImplementedError(_SIM_ONLY)
-
-    def decide(self, decision: RuleInput) -> int:
-        """Not available: a batch decision needs what no observation (so no
-        :class:`~rtaw_marl.decision.rule_input.RuleInput`) holds, the robots free in this
-        timestep and the pickups robots are heading to; :meth:`act_sim` reads them from
-        the simulator.
-
-        Raises:
-            NotImplementedError: Always.
         """
         raise NotImplementedError(_SIM_ONLY)
 

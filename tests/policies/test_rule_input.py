@@ -83,3 +83,26 @@ def test_free_times_restore_whole_milliseconds() -> None:
     back = free_times(column, scale)
     np.testing.assert_array_equal(back[:4], times[:4])
     assert back[4] == pytest.approx(times[4], rel=1e-6)
+
+
+def test_own_row_is_the_robot_itself_on_the_fast_path() -> None:
+    """``own_row`` gives the acting robot's own index without a search on the fast path,
+    and a row equal to it on the observation path (the first equal row: robots on one
+    cell, freed at once); either way their rows, all RBTS reads, are equal."""
+    # Four robots start idle on one cell: at t = 0 their rows are equal.
+    env = warehouse_v1.env(num_robots=4, num_tasks=20, layout="A", robot_starts=[[3, 3]] * 4)
+    env.reset(seed=1)
+    sim = env.unwrapped.sim
+    for _ in env.agent_iter():
+        obs, _, terminated, truncated, _ = env.last()
+        if terminated or truncated:
+            env.step(None)
+            continue
+        fast = RuleInput.of_sim(sim, {"own_row", "robot_xy", "free_in"})
+        read = RuleInput.of_observation(
+            obs, {"own_row", "robot_xy", "free_in"}, scale=sim.layout.scale, reader="test"
+        )
+        assert fast.robot == sim.robot
+        assert np.array_equal(read.robot_xy[read.robot], fast.robot_xy[fast.robot])
+        assert read.free_in[read.robot] == fast.free_in[fast.robot]
+        env.step(int(np.flatnonzero(obs["action_mask"])[0]))
