@@ -284,6 +284,9 @@ def _learned(option: str, sources: list[str], candidates: int | None) -> dict[st
     ``candidates=K`` (a policy restricted to K candidates is another policy, with its own
     journal entries).
     """
+    twice = sorted({s for s in sources if sources.count(s) > 1})
+    if twice:
+        raise ConfigError(f"{option}= names {twice[0]!r} twice; each value names one policy")
     tag = "" if candidates is None else f"@k{candidates}"
     labels = sources if option == "pretrained" else checkpoint_labels(sources)
     return {f"{label}{tag}": source for label, source in zip(labels, sources, strict=True)}

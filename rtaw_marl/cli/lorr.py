@@ -1,9 +1,11 @@
 """``rtaw-lorr``: schedulers inside the League of Robot Runners' own simulator.
 
-Builds LoRR's 2024 start kit once per machine (a few minutes; system packages installed
-where missing), then runs ``lifelong`` on a problem once per scheduler, with the kit's
-default planner, and writes one ``results.json``: tasks finished, schedule and planner
-errors, entry timeouts, and each rtaw_marl scheduler's decisions and deferred robots.
+Builds LoRR's 2024 start kit once per machine (a few minutes; ``make lorr-kit`` installs
+the system packages it needs), then runs ``lifelong`` on a problem once per scheduler,
+with the kit's default planner, and writes one ``results.json``: tasks finished, schedule
+and planner errors, entry timeouts, and each rtaw_marl scheduler's decisions and deferred
+robots. The file is rewritten after each scheduler: a stop (Ctrl-C, SIGTERM) keeps the
+finished ones, and the same command with ``resume=true`` runs the rest.
 
 Examples::
 
@@ -12,14 +14,16 @@ Examples::
         policy=[lorr_default,mpdm,batch,pretrained] pretrained=generalist_plus candidates=32
     rtaw-lorr problem=P.json policy=checkpoint checkpoint=runs/x/checkpoints/best.pt \\
         timesteps=5000 plan_time_ms=1000
+    rtaw-lorr problem=P.json policy=[mpdm,rbts] output=runs/lorr.json resume=true
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
 import re
+import shutil
+import signal
 from pathlib import Path
 from typing import Any
 
@@ -31,20 +35,27 @@ from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.integrations.lorr.config import LORR_DEFAULT, LoRRConfig
 from rtaw_marl.integrations.lorr.entry import RunSpec
 from rtaw_marl.integrations.lorr.kit import build_kit
-from rtaw_marl.integrations.lorr.run import LoRRRun, run_lifelong
+from rtaw_marl.integrations.lorr.results import describe, finished_runs, write_results
+from rtaw_marl.integrations.lorr.run import RUN_FILES, LoRRRun, run_lifelong
 from rtaw_marl.policies import BASELINES
 from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.policies.user import import_policy, is_import_spec
-from rtaw_marl.sim.lorr import read_problem
-from rtaw_marl.utils.atomic import atomic_write
-from rtaw_marl.utils.runs import check_writable_file
+from rtaw_marl.sim.lorr import LoRRProblem, read_problem
+from rtaw_marl.utils.runs import claim_file, claim_folder
+from rtaw_marl.utils.signals import Interrupted
 
 #: Rules that cannot schedule inside another simulator.
 _NO_OUTSIDE = {"hindsight": "hindsight needs the episode's future, which LoRR does not tell"}
 
 
 def run(cfg: DictConfig | LoRRConfig) -> dict[str, LoRRRun]:
-    """Build the kit, run each scheduler, print and write the results."""
+    """Build the kit, run each scheduler, print and write the results.
+
+    Everything is checked before the first ``lifelong`` run: the problem in full, each
+    scheduler (checkpoints loaded), the output and run folders (claimed). results.json
+    is rewritten after each scheduler, so a stop keeps the finished ones and
+    ``resume=true`` runs the rest.
+    """
     cfg = typed(cfg)
     if cfg.build_only:
         for variant in ("python", "default"):
@@ -54,27 +65,90 @@ def run(cfg: DictConfig | LoRRConfig) -> dict[str, LoRRRun]:
         raise ConfigError("rtaw-lorr needs problem=FILE.json (a LoRR 2024 problem)")
     problem = read_problem(str(cfg.problem))
     folder = Path(HydraConfig.get().runtime.output_dir)
-    output = check_writable_file(cfg.output or folder / "results.json")
+    output = Path(cfg.output) if cfg.output else folder / "results.json"
     schedulers = _schedulers(cfg, str(problem.path))
-    runs: dict[str, LoRRRun] = {}
-    for label, spec in schedulers.items():
-        build = build_kit("default" if spec is None else "python", cfg.kit, cfg.cache)
-        print(f"{label}: lifelong, {cfg.timesteps} timesteps at {cfg.plan_time_ms} ms ...")
-        runs[label] = run_lifelong(
-            build, problem.path, folder / _folder_name(label), spec, label, cfg.timesteps,
-            cfg.plan_time_ms, cfg.preprocess_time_ms,
-        )  # fmt: skip
-        print(_line(runs[label], runs))
-    results = {
-        "config": dataclasses.asdict(cfg),
-        "problem": str(problem.path),
-        "simulator": "lorr-start-kit-2.1.2",
-        "runs": {k: dataclasses.asdict(v) for k, v in runs.items()},
-    }
-    text = json.dumps(results, indent=1)
-    atomic_write(output, lambda fh: fh.write(text.encode()))
+    with claim_file(output) as output, claim_folder(folder, "hydra.run.dir") as folder:
+        runs = finished_runs(output, cfg, problem) if cfg.resume else {}
+        runs = {label: runs[label] for label in schedulers if label in runs}
+        todo = {label: spec for label, spec in schedulers.items() if label not in runs}
+        _clear_run_folders(folder, list(todo), cfg.resume)
+        if runs:
+            print(f"resume: {describe(runs)} kept from {output}")
+        print(_estimate(cfg, len(todo)))
+        try:
+            for label, spec in todo.items():
+                runs[label] = _run_one(cfg, problem, folder, label, spec)
+                print(_line(runs[label], runs))
+                write_results(output, cfg, problem, runs, [k for k in todo if k not in runs])
+        except KeyboardInterrupt as exc:
+            raise _stopped(exc, cfg, output, runs, todo) from None
+    write_results(output, cfg, problem, {k: runs[k] for k in schedulers}, [])
     print(f"results: {output}")
     return runs
+
+
+def _run_one(
+    cfg: LoRRConfig, problem: LoRRProblem, folder: Path, label: str, spec: RunSpec | None
+) -> LoRRRun:
+    build = build_kit("default" if spec is None else "python", cfg.kit, cfg.cache)
+    print(f"{label}: lifelong, {cfg.timesteps} timesteps at {cfg.plan_time_ms} ms ...")
+    return run_lifelong(
+        build, problem.path, folder / _folder_name(label), spec, label, cfg.timesteps,
+        cfg.plan_time_ms, cfg.preprocess_time_ms,
+    )  # fmt: skip
+
+
+def _clear_run_folders(folder: Path, labels: list[str], resume: bool) -> None:
+    """Make room for the schedulers to run in ``folder`` (held by this run).
+
+    A scheduler's folder left by an earlier run is refused (its output would mix with
+    the new one), except with ``resume=true``, where it is what a stopped run left: it
+    is removed if it holds only what ``lifelong`` writes, never anything else.
+    """
+    for label in labels:
+        sub = folder / _folder_name(label)
+        if not sub.exists():
+            continue
+        if not resume:
+            raise ConfigError(
+                f"{sub} already holds a run of {label}: give another hydra.run.dir, or "
+                "resume=true with the same output to continue that run"
+            )
+        extra = sorted(p.name for p in sub.iterdir() if p.name not in RUN_FILES)
+        if not sub.is_dir() or sub.is_symlink() or extra:
+            raise ConfigError(
+                f"resume=true: {sub} holds files lifelong does not write ({', '.join(extra)}); "
+                "move it away or give another hydra.run.dir"
+            )
+        shutil.rmtree(sub)
+
+
+def _estimate(cfg: LoRRConfig, runs: int) -> str:
+    """The run's length: LoRR's planner uses its whole time limit every timestep."""
+    seconds = runs * cfg.timesteps * cfg.plan_time_ms / 1000.0
+    span = f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.0f} min"
+    return (
+        f"rtaw-lorr: {runs} lifelong run(s) of {cfg.timesteps} timesteps at "
+        f"{cfg.plan_time_ms} ms each: about {span} (the planner uses its whole time limit)"
+    )
+
+
+def _stopped(
+    exc: KeyboardInterrupt,
+    cfg: LoRRConfig,
+    output: Path,
+    runs: dict[str, LoRRRun],
+    todo: dict[str, Any],
+) -> Interrupted:
+    """The one line of a stop: what was kept and the command that continues."""
+    signum = exc.signum if isinstance(exc, Interrupted) else signal.SIGINT
+    left = [label for label in todo if label not in runs]
+    kept = f"{describe(runs)} kept in {output}" if runs else "no scheduler had finished"
+    again = "resume=true" + ("" if cfg.output else f" output={output}")
+    rest = describe(dict.fromkeys(left))
+    return Interrupted(
+        f"stopped: {kept}; run the same command with {again} to run {rest}", signum=signum
+    )
 
 
 def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | None]:
@@ -100,27 +174,41 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | None]:
         if is_import_spec(name):
             # Imported here too, so a bad module or name is one line before any run.
             label, _ = import_policy(name)
-            out[label] = RunSpec(policy=name, stats="stats.json", search_path=os.getcwd(), **common)
+            spec = RunSpec(policy=name, stats="stats.json", search_path=os.getcwd(), **common)
+            _add(out, {label: spec})
             continue
         if name not in valid:
             raise unknown_name("policy", name, valid)
         if name == LORR_DEFAULT:
-            out[name] = None
+            _add(out, {name: None})
         elif name in sources:
-            out.update(_learned(cfg, name, sources[name], common))
+            _add(out, _learned(cfg, name, sources[name], common))
         else:
-            out[name] = RunSpec(policy=name, stats="stats.json", **common)
+            _add(out, {name: RunSpec(policy=name, stats="stats.json", **common)})
     return out
 
 
-def _learned(cfg: LoRRConfig, option: str, given: list[str], common: dict[str, Any]) -> dict:
-    from rtaw_marl.policies.network import checkpoint_path
+def _add(out: dict[str, RunSpec | None], new: dict[str, RunSpec | None]) -> None:
+    """Add schedulers; one named twice is refused (it would silently run once)."""
+    for label, spec in new.items():
+        if label in out:
+            raise ConfigError(f"policy names the scheduler {label!r} twice; name each once")
+        out[label] = spec
 
+
+def _learned(cfg: LoRRConfig, option: str, given: list[str], common: dict[str, Any]) -> dict:
+    from rtaw_marl.policies.network import checkpoint_path, load_policy
+
+    twice = sorted({g for g in given if given.count(g) > 1})
+    if twice:
+        raise ConfigError(f"{option}= names {twice[0]!r} twice; each value names one policy")
     tag = "" if cfg.candidates is None else f"@k{cfg.candidates}"
     out = {}
     for source, label in zip(given, checkpoint_labels(given), strict=True):
-        # Resolved here, so a bad name or file is one line before any run.
+        # Resolved and loaded here (safely, as inside lifelong), so a missing, damaged
+        # or crafted file is one line before any run, not an error after earlier ones.
         path = checkpoint_path(source)
+        load_policy(str(path), candidates=cfg.candidates)
         out[f"{label}{tag}"] = RunSpec(
             policy=option, source=str(path), candidates=cfg.candidates, stats="stats.json",
             **common,

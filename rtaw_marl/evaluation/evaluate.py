@@ -168,8 +168,10 @@ def _episode(
     start = time.perf_counter()
     metrics = run_episode(sim, policy, seed, on_decisions)
     row = {**metrics.as_dict(), "wall_time_s": time.perf_counter() - start}
-    if sim.executor.collision_aware:
-        # Every collision-aware episode is validated on the checker's own code path.
+    if sim.executor.keeps_schedule:
+        # Every collision-aware episode is validated on the checker's own code path,
+        # unless it kept no positions (pibt's navigator.record=false, for fleets whose
+        # trace would not fit in memory): its executor keeps robots on distinct cells.
         schedule = sim.schedule()
         if sim.config.episode_mode == "horizon":
             # Tasks in progress at the horizon are served but not in PIBT's schedule.

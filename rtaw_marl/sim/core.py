@@ -383,7 +383,10 @@ class WarehouseSim:
         row = self.tasks[task]
         ox, oy, dx, dy = row.tolist()
         self._slots.set(slot, ox, oy)
-        length = self._slots.distance_to(slot, dx, dy)
+        # A task whose pickup is its delivery (LoRR's files hold some) takes one timestep,
+        # as in LoRR (one errand checked per timestep), never zero: a robot at its cell
+        # would otherwise finish the whole pool without time passing.
+        length = self._slots.distance_to(slot, dx, dy) or 1.0
         self.task_length[task] = length
         self.queue_ids[slot] = task
         self.queue_mask[slot] = True

@@ -98,6 +98,12 @@ class Executor(ABC):
     def collision_aware(self) -> bool:
         """Whether robots occupy cells and wait for each other (a schedule exists)."""
 
+    @property
+    def keeps_schedule(self) -> bool:
+        """Whether :meth:`schedule` can give the episode's executed schedule (a
+        collision-aware executor told not to record positions cannot)."""
+        return self.collision_aware
+
     @abstractmethod
     def bind(self, config: SimSettings, layout: Layout, distance_model: DistanceModel) -> None:
         """Attach to a simulator; called once by its constructor.

@@ -1,13 +1,14 @@
 """The League of Robot Runners' 2024 problems as a scenario source (``layout=lorr``,
-``tasks=lorr``, ``scenario=lorr``).
+``tasks=lorr``, ``scenario=lorr``), read and checked in full by one reader.
 
 A LoRR problem is a JSON file naming, relative to itself, a MovingAI ``mapFile``, an
 ``agentFile`` of start cells and a ``taskFile`` of tasks, with ``teamSize`` robots and
-``numTasksReveal``: at every timestep ``ceil(numTasksReveal x teamSize)`` tasks are
-revealed and not yet finished, a finished task replaced by the next one of the file,
-which cycles (``task_id % len(tasks)``, as the start kit's ``TaskManager``).
+``numTasksReveal``: at every timestep ``int(numTasksReveal x teamSize)`` tasks are
+revealed and not yet finished (the start kit multiplies in single precision and
+truncates), a finished task replaced by the next one of the file, which cycles
+(``task_id % len(tasks)``, as the start kit's ``TaskManager``).
 
-Here that window is the queue: ``env.queue_len = ceil(numTasksReveal x M)`` with
+Here that window is the queue: ``env.queue_len = int(numTasksReveal x M)`` with
 ``env.refill=finish`` (the revealed tasks include the ``M`` in progress), in
 ``episode_mode=horizon`` episodes of LoRR's 5,000 timesteps by default.
 
@@ -15,8 +16,19 @@ Files (the start kit's ``Input_Output_Format.md``): ``.agents`` and ``.tasks`` s
 with an optional ``# version ...`` line, then a count, then one line per robot (a
 location) or task (comma-separated locations, visited in order). A location is
 linearized, ``row x width + column``, so ``x = loc % width`` and ``y = loc // width``.
-Every LoRR 2024 task has two errands (pickup, delivery); a task with another number is
-refused, since a task here is one pickup and one delivery.
+
+:func:`read_problem` is the one reader: ``rtaw-eval scenario=lorr``, ``rtaw-lorr`` and
+the viewer take a problem only through it, so all of them accept and refuse the same
+files, before any work. It refuses, with one line naming the file, the line and the
+key: a problem JSON that is not an object of the five keys; a referenced file outside
+the problem's folder (a symbolic link to the JSON is followed first, so every reader and
+LoRR's ``lifelong`` use the same folder); a map, agent or task file that does not parse;
+``teamSize`` above the agent file's count; a non-finite ``numTasksReveal`` or one that
+reveals no more tasks than robots; two robots on one start cell or a start on an
+obstacle; a task file with no task; and a task of other than two errands (every LoRR
+2024 task is a pickup and a delivery). A task whose pickup is its delivery (LoRR's files
+hold a few) is kept and takes a timestep, as in LoRR, which checks one errand per robot
+and timestep.
 """
 
 from __future__ import annotations
@@ -25,6 +37,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -42,6 +55,7 @@ __all__ = [
     "read_agents",
     "read_lorr_tasks",
     "read_problem",
+    "reveal_window",
 ]
 
 #: LoRR 2024's episode length (timesteps), the default horizon of ``scenario=lorr``.
@@ -59,19 +73,32 @@ LORR_ENV: dict[str, object] = {
 }
 
 _KEYS = ("mapFile", "agentFile", "taskFile", "teamSize", "numTasksReveal")
+_FILES = ("mapFile", "agentFile", "taskFile")
+#: The start kit keeps counts in C++ ``int``: a window past this overflows there.
+_INT_MAX = 2**31 - 1
 
 
-@dataclass(frozen=True)
+def reveal_window(reveal: float, num_robots: int) -> int:
+    """Revealed tasks with ``num_robots`` robots, as the start kit computes them:
+    ``int(float(numTasksReveal) * M)``, a single-precision product truncated
+    (``TaskManager::set_num_tasks_reveal``)."""
+    return int(np.float32(reveal) * np.float32(num_robots))
+
+
+@dataclass(frozen=True, eq=False)
 class LoRRProblem:
-    """A LoRR problem file, read.
+    """A LoRR problem file, read and checked in full (:func:`read_problem`).
 
     Attributes:
-        path: The JSON file.
+        path: The JSON file (a symbolic link followed).
         map_path: Its map (absolute, resolved against the JSON's folder).
         agents_path: Its start cells.
         tasks_path: Its tasks.
         team_size: ``teamSize``, the robots of the problem.
         reveal: ``numTasksReveal``, revealed tasks per robot.
+        grid: The map.
+        agents: The agent file's start cells ``int64 [A, 2]`` ``(x, y)``, read-only.
+        tasks: The task file's tasks ``int64 [T, 4]`` ``(ox, oy, dx, dy)``, read-only.
     """
 
     path: Path
@@ -80,24 +107,30 @@ class LoRRProblem:
     tasks_path: Path
     team_size: int
     reveal: float
+    grid: Layout
+    agents: np.ndarray
+    tasks: np.ndarray
 
     def layout(self) -> Layout:
         """The problem's map."""
-        return load_layout(self.map_path)
+        return self.grid
 
     def mean_task_length(self) -> float:
         """The mean Manhattan distance from pickup to delivery of the file's tasks (at
         least 1): a lower bound on a robot's timesteps per task."""
-        tasks = read_lorr_tasks(self.tasks_path, self.layout())
-        return max(1.0, float(np.abs(tasks[:, :2] - tasks[:, 2:]).sum(axis=1).mean()))
+        lengths = np.abs(self.tasks[:, :2] - self.tasks[:, 2:]).sum(axis=1)
+        return max(1.0, float(lengths.mean()))
 
     def window(self, num_robots: int) -> int:
-        """Revealed tasks with ``num_robots`` robots: ``ceil(reveal x M)``."""
-        return math.ceil(self.reveal * num_robots - 1e-9)
+        """Revealed tasks with ``num_robots`` robots (:func:`reveal_window`)."""
+        return reveal_window(self.reveal, num_robots)
 
 
 def read_problem(path: str | Path) -> LoRRProblem:
-    """Read a LoRR 2024 problem JSON (its map, agent and task files must exist).
+    """Read a LoRR 2024 problem JSON and check it in full (module docstring).
+
+    A read is cached while the four files are unchanged (the config resolvers ask for
+    one problem several times).
 
     Args:
         path: The JSON file, or ``builtin:NAME`` for a shipped problem
@@ -105,29 +138,16 @@ def read_problem(path: str | Path) -> LoRRProblem:
 
     Raises:
         ConfigError: ``builtin:`` names no shipped map (the message lists them).
-        TaskFileError: The file is missing, not JSON, misses a key, or names a file that
-            does not exist; the message names the file and the key.
+        TaskFileError: The problem or a file it names is missing, malformed, outside the
+            problem's folder or inconsistent; the message names the file and the key.
+        LayoutError: The map is malformed, or a start or task cell is not free.
     """
     path = resolve_path(path)
     if not path.is_file():
         raise TaskFileError(f"LoRR problem file not found: {path}")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise TaskFileError(f"{path}: not a LoRR problem (JSON): {exc}") from None
-    if not isinstance(data, dict):
-        raise TaskFileError(f"{path}: a LoRR problem is a JSON object with {', '.join(_KEYS)}")
-    missing = [k for k in _KEYS if k not in data]
-    if missing:
-        raise TaskFileError(
-            f"{path}: LoRR problem misses {missing[0]!r} (needs {', '.join(_KEYS)})"
-        )
-    files = {}
-    for key in ("mapFile", "agentFile", "taskFile"):
-        target = path.parent / str(data[key])
-        if not target.is_file():
-            raise TaskFileError(f"{path}: {key} {data[key]!r} not found (looked for {target})")
-        files[key] = target.resolve()
+    path = path.resolve()
+    data = _problem_json(path)
+    files = {key: _referenced_file(path, data, key) for key in _FILES}
     team, reveal = data["teamSize"], data["numTasksReveal"]
     if isinstance(team, bool) or not isinstance(team, int) or team < 1:
         raise TaskFileError(f"{path}: teamSize must be a positive integer, got {team!r}")
@@ -136,9 +156,96 @@ def read_problem(path: str | Path) -> LoRRProblem:
             f"{path}: numTasksReveal must be a number above 1 (the revealed tasks include "
             f"those in progress), got {reveal!r}"
         )
+    if not math.isfinite(reveal) or reveal * team > _INT_MAX:
+        raise TaskFileError(
+            f"{path}: numTasksReveal x teamSize must be a finite count of at most "
+            f"{_INT_MAX} tasks, got {reveal!r} x {team}"
+        )
+    stamp = tuple((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in (path, *files.values()))
+    key = (stamp, team, float(reveal))
+    if key not in _CACHE:
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = _read_files(path, files, team, float(reveal))
+    return _CACHE[key]
+
+
+_CACHE: dict[tuple, LoRRProblem] = {}
+_CACHE_SIZE = 8
+
+
+def _problem_json(path: Path) -> dict[str, Any]:
+    """The problem's JSON object, with every key it needs."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise TaskFileError(f"{path}: not a LoRR problem (JSON): {exc}") from None
+    except RecursionError:
+        raise TaskFileError(f"{path}: not a LoRR problem (JSON nested too deeply)") from None
+    if not isinstance(data, dict):
+        raise TaskFileError(f"{path}: a LoRR problem is a JSON object with {', '.join(_KEYS)}")
+    missing = [k for k in _KEYS if k not in data]
+    if missing:
+        raise TaskFileError(
+            f"{path}: LoRR problem misses {missing[0]!r} (needs {', '.join(_KEYS)})"
+        )
+    return data
+
+
+def _referenced_file(path: Path, data: dict[str, Any], key: str) -> Path:
+    """The file ``data[key]`` names, which must exist under the problem's folder: a
+    problem naming ``../../etc/passwd`` is refused without opening it."""
+    name = data[key]
+    if not isinstance(name, str) or not name:
+        raise TaskFileError(f"{path}: {key} must be a file name, got {name!r}")
+    target = (path.parent / name).resolve()
+    if not target.is_relative_to(path.parent):
+        raise TaskFileError(
+            f"{path}: {key} {name!r} lies outside the problem's folder {path.parent} "
+            "(a problem names its files under its own folder)"
+        )
+    if not target.is_file():
+        raise TaskFileError(f"{path}: {key} {name!r} not found (looked for {target})")
+    return target
+
+
+def _read_files(path: Path, files: dict[str, Path], team: int, reveal: float) -> LoRRProblem:
+    """Read the map, agents and tasks and check them against each other."""
+    grid = load_layout(files["mapFile"])
+    agents = read_agents(files["agentFile"], grid)
+    if team > len(agents):
+        raise TaskFileError(
+            f"{path}: teamSize {team} is more than the {len(agents)} start cells of "
+            f"agentFile {files['agentFile'].name}"
+        )
+    _check_distinct_starts(agents[:team], files["agentFile"], grid.width)
+    window = reveal_window(reveal, team)
+    if window <= team:
+        raise TaskFileError(
+            f"{path}: numTasksReveal {reveal!r} reveals {window} tasks to {team} robots "
+            f"(the start kit's int(numTasksReveal x teamSize)); this simulator needs at "
+            f"least one more task than robots: numTasksReveal >= {(team + 1) / team:.6g}"
+        )
+    tasks = read_lorr_tasks(files["taskFile"], grid)
+    for array in (agents, tasks):
+        array.setflags(write=False)  # shared by every reader of the cache
     return LoRRProblem(
-        path, files["mapFile"], files["agentFile"], files["taskFile"], team, float(reveal)
-    )
+        path, files["mapFile"], files["agentFile"], files["taskFile"], team, reveal,
+        grid, agents, tasks,
+    )  # fmt: skip
+
+
+def _check_distinct_starts(starts: np.ndarray, path: Path, width: int) -> None:
+    """Two robots never start on one cell (LoRR's simulator would run them as one)."""
+    cells = starts[:, 1] * width + starts[:, 0]
+    _, first, counts = np.unique(cells, return_index=True, return_counts=True)
+    if (counts > 1).any():
+        cell = int(cells[first[counts > 1][0]])
+        robots = np.flatnonzero(cells == cell)[:2].tolist()
+        raise TaskFileError(
+            f"{path}: robots {robots[0]} and {robots[1]} start on the same location {cell} "
+            f"(x={cell % width}, y={cell // width})"
+        )
 
 
 def _numbered_lines(path: Path, what: str) -> tuple[int, list[tuple[int, str]]]:
@@ -191,10 +298,18 @@ def read_agents(path: str | Path, layout: Layout) -> np.ndarray:
 
 
 def read_lorr_tasks(path: str | Path, layout: Layout) -> np.ndarray:
-    """Tasks ``int64 [T, 4]`` ``(ox, oy, dx, dy)`` of a LoRR ``.tasks`` file on ``layout``."""
+    """Tasks ``int64 [T, 4]`` ``(ox, oy, dx, dy)`` of a LoRR ``.tasks`` file on ``layout``.
+
+    Raises:
+        TaskFileError: No task, a task of other than two errands or a location off the
+            map (the line is named).
+        LayoutError: An errand on an obstacle.
+    """
     path = Path(path)
     cells = layout.width * layout.height
-    _, rest = _numbered_lines(path, "task")
+    count, rest = _numbered_lines(path, "task")
+    if count == 0:
+        raise TaskFileError(f"{path}: holds no task (a LoRR task file needs at least one)")
     rows = []
     for n, text in rest:
         locs = _locations(text, f"{path}:{n}", cells)
@@ -204,8 +319,8 @@ def read_lorr_tasks(path: str | Path, layout: Layout) -> np.ndarray:
                 "tasks (2 errands, every LoRR 2024 task) are supported"
             )
         rows.append(locs)
-    xy = _xy(np.asarray(rows, dtype=np.int64), layout.width)
-    tasks = xy.reshape(-1, 4)
+    linear = np.asarray(rows, dtype=np.int64)
+    tasks = _xy(linear, layout.width).reshape(-1, 4)
     layout.check_cells(tasks[:, :2], f"{path}: pickup of task")
     layout.check_cells(tasks[:, 2:], f"{path}: delivery of task")
     return tasks
@@ -226,8 +341,8 @@ class LoRRTasks(TaskStream):
         self.problem = problem
         self.starts_from = starts
         self._layout = problem.layout()
-        self.tasks = read_lorr_tasks(problem.tasks_path, self._layout)
-        self.agents = read_agents(problem.agents_path, self._layout)
+        self.tasks = problem.tasks
+        self.agents = problem.agents
 
     def _check_layout(self, layout: Layout) -> None:
         if layout.obstacles.shape != self._layout.obstacles.shape or not np.array_equal(
@@ -260,6 +375,9 @@ def lorr_env(
     outlasts the horizon, and LoRR's 5,000-timestep horizon (``num_robots`` overrides
     ``teamSize``)."""
     m = problem.team_size if num_robots is None else int(num_robots)
+    if m < 1 or int(horizon) < 1:
+        key, value = ("env.num_robots", m) if m < 1 else ("env.horizon", horizon)
+        raise ConfigError(f"{key} must be >= 1, got {value}")
     per_robot = math.ceil(POOL_FACTOR * int(horizon) / problem.mean_task_length())
     return {
         "num_robots": m,

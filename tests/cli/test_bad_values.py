@@ -90,6 +90,18 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     # One episode counted three times would be "significant".
     ("eval", ["seeds=[0,0,0]"], "seeds lists a seed more than once: 0 (3 times); each seed"),
     ("eval", ["seeds=[4,1,4,1]"], "seeds lists a seed more than once: 4 (2 times), 1 (2 times)"),
+    # A policy named twice was merged silently: it ran once, under one label.
+    ("eval", ["policy=[mpdm,mpdm]"], "two policies are labelled 'mpdm'"),
+    (
+        "eval",
+        ["policy=pretrained", "pretrained=[generalist,generalist]"],
+        "pretrained= names 'generalist' twice",
+    ),
+    (
+        "eval",
+        ["scenario=lorr", "tasks.problem=builtin:random_32_32_20_100.json", "env.horizon=-5"],
+        "env.horizon must be >= 1, got -5",
+    ),
     # Hydra's grammar reads unquoted values as ASCII: the line shows the quoted form.
     (
         "eval",

@@ -116,10 +116,11 @@ def test_first_tasks_come_from_the_queue() -> None:
     assert -(sim.step(0) + sim.step(0)) == 18.0
 
 
-def test_a_robot_free_again_at_once_keeps_the_bound_valid() -> None:
-    """A zero-length task at robot 0's feet frees it at t=0 again: it wins the tie and
-    takes task 1 too, so robot 1 never moves and the episode's TTD is 0."""
-    tasks = FixedTasks([[0, 0, 0, 0], [0, 0, 5, 0]])
+def test_a_task_at_the_robots_feet_takes_a_timestep_and_keeps_the_bound_valid() -> None:
+    """A zero-length task at robot 0's feet (pickup = delivery, as in some LoRR files)
+    takes one timestep, as in LoRR, not zero: robot 1 decides next at t=0 and travels
+    5 cells to task 1; the bound stays at most the episode's TTD."""
+    tasks = FixedTasks([[0, 0, 0, 0], [4, 0, 5, 0]])
     sim = build_sim(
         SimSpec.of(
             {
@@ -137,10 +138,11 @@ def test_a_robot_free_again_at_once_keeps_the_bound_valid() -> None:
     )
     sim.reset(0)
     assert sim.step(0) == 0.0
-    assert sim.robot == 0
-    assert sim.step(0) == 0.0
+    assert (sim.robot, sim.time) == (1, 0.0)
+    assert sim.robot_free_at[0] == 1.0
+    assert sim.step(0) == -5.0
     assert sim.done
-    assert ttd_lower_bound(sim, 0) == 0.0
+    assert ttd_lower_bound(sim, 0) <= 5.0
 
 
 def untimed_assignment_bound(sim: WarehouseSim, seed: int) -> float:

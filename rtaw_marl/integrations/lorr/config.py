@@ -14,6 +14,9 @@ __all__ = ["LORR_DEFAULT", "LoRRConfig"]
 #: ``policy=lorr_default``: the start kit's own scheduler (its C++ entry).
 LORR_DEFAULT = "lorr_default"
 
+#: The largest value ``lifelong`` takes for a count or a time limit (a C++ ``int``).
+_INT_MAX = 2**31 - 1
+
 
 @dataclass(kw_only=True)
 class LoRRConfig:
@@ -41,6 +44,8 @@ class LoRRConfig:
         cache: Where builds are kept; ``None``: ``RTAW_LORR_CACHE`` or
             ``~/.cache/rtaw_marl/lorr``.
         build_only: Build (once per machine) and stop.
+        resume: Keep the schedulers already in ``output`` (a stopped run with the same
+            setting) and run the rest.
     """
 
     problem: str | None = None
@@ -57,12 +62,19 @@ class LoRRConfig:
     kit: str | None = None
     cache: str | None = None
     build_only: bool = False
+    resume: bool = False
 
     def __post_init__(self) -> None:
         check_fields(self)
         at_least(self, "", 1, "timesteps")
         at_least(self, "", 1, "plan_time_ms")
         at_least(self, "", 1, "preprocess_time_ms")
+        for key in ("timesteps", "plan_time_ms", "preprocess_time_ms"):
+            # lifelong reads them into C++ ints: a larger value would wrap around there.
+            if getattr(self, key) > _INT_MAX:
+                raise ConfigError(
+                    f"{key} must be <= {_INT_MAX} (a C++ int in lifelong), got {getattr(self, key)}"
+                )
         if self.candidates is not None:
             at_least(self, "", 1, "candidates")
         if not 0 < float(self.share) <= 1:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 from rtaw_marl.errors import ConfigError
 
-__all__ = ["KIT_VERSION", "KitBuild", "StartKitError", "build_kit", "kit_source"]
+__all__ = ["KIT_VERSION", "KitBuild", "StartKitError", "build_kit", "kit_source", "set_track"]
 
 KIT_VERSION = "2.1.2"
 VARIANTS = ("python", "default")
@@ -201,7 +201,10 @@ def _compile(root: Path, variant: str, pybind_dir: str | None) -> None:
     steps: list[tuple[str, list[str]]] = []
     if variant == "python":
         python = sys.executable
-        steps.append(("set_track.bash scheduler", ["bash", "python/set_track.bash", "scheduler"]))
+        # What the kit's python/set_track.bash does, in Python: the script expands its own
+        # folder unquoted (rm -rf $PYTHON_PATH"/tmp"/*), so a cache path with a space
+        # would delete what stands before the space.
+        set_track(root, "scheduler")
         steps.append(
             ("cmake", [
                 "cmake", "-B", "build", "./", "-DPYTHON=true", "-DCMAKE_BUILD_TYPE=Release",
@@ -230,6 +233,41 @@ def _compile(root: Path, variant: str, pybind_dir: str | None) -> None:
                     f"start kit build failed at {name} (exit {done.returncode}): "
                     f"{_last_error(kept)} (log: {kept})"
                 )
+
+
+#: ``python/set_track.bash``'s tracks: the folders whose files make ``python/tmp``.
+_TRACKS = {
+    "combined": ("common", "user_planner", "user_scheduler"),
+    "planner": ("common", "user_planner", "default_scheduler"),
+    "scheduler": ("common", "default_planner", "user_scheduler"),
+}
+
+
+def set_track(root: Path, track: str) -> None:
+    """Fill ``root/python/tmp`` with a track's Python sources, as the kit's
+    ``set_track.bash TRACK`` does (its ``cp -r DIR/* tmp``: entries not starting with a
+    dot, later folders replacing earlier ones), with no shell and any path.
+
+    Raises:
+        StartKitError: An unknown track, or a source folder missing from the kit.
+    """
+    if track not in _TRACKS:
+        raise StartKitError(f"unknown start kit track {track!r}; valid: {', '.join(_TRACKS)}")
+    python = root / "python"
+    tmp = python / "tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir(parents=True)
+    for name in _TRACKS[track]:
+        src = python / name
+        if not src.is_dir():
+            raise StartKitError(f"the start kit has no python/{name} folder ({src})")
+        for entry in sorted(src.iterdir()):
+            if entry.name.startswith("."):
+                continue  # the shell's * leaves hidden entries out
+            if entry.is_dir():
+                shutil.copytree(entry, tmp / entry.name, dirs_exist_ok=True)
+            else:
+                shutil.copy2(entry, tmp / entry.name)
 
 
 def _last_error(log_file: Path) -> str:

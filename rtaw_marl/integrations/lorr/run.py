@@ -27,7 +27,13 @@ from rtaw_marl.integrations.lorr.entry import SPEC_VARIABLE, RunSpec
 from rtaw_marl.integrations.lorr.kit import KitBuild, StartKitError
 from rtaw_marl.sim.lorr import read_problem
 
-__all__ = ["LoRRRun", "read_output", "run_lifelong"]
+__all__ = ["RUN_FILES", "LoRRRun", "read_output", "run_lifelong"]
+
+#: What :func:`run_lifelong` and ``lifelong`` write in a run folder (and nothing else).
+RUN_FILES = frozenset(
+    {"spec.json", "pyTaskScheduler.py", "config.json", "output.json", "lifelong.log",
+     "stdout.txt", "stats.json", "__pycache__"}
+)  # fmt: skip
 
 #: The run folder's module, imported by ``lifelong``: the start kit's types, then ours.
 _SHIM = '''"""Written by rtaw_marl: serves an rtaw_marl policy as LoRR's task scheduler."""

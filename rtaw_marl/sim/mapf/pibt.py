@@ -131,6 +131,10 @@ class PIBTExecutor(Executor):
     def collision_aware(self) -> bool:
         return True
 
+    @property
+    def keeps_schedule(self) -> bool:
+        return self.record
+
     def bind(self, config: SimSettings, layout: Layout, distance_model: DistanceModel) -> None:
         if self._bound:
             raise ConfigError("executor 'pibt' already belongs to a simulator; make one each")
@@ -278,9 +282,10 @@ class PIBTExecutor(Executor):
         self.pickup_at[task] = self.t
         self.rec.task_ttd[task] = self.t - self.rec.task_assigned[task]
         self.phase[robot] = _TO_DELIVERY
+        # No delivery in the same timestep, even at the pickup's own cell: LoRR checks
+        # one errand per robot and timestep, so such a task ends a timestep later (the
+        # robot kept there), never in zero time.
         self._set_goal(robot, int(self.delivery[robot]))
-        if self.pos[robot] == self.goal[robot]:
-            self._delivered(robot)
 
     def _delivered(self, robot: int) -> None:
         task, rec = int(self.task[robot]), self.rec

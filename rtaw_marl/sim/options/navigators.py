@@ -143,7 +143,9 @@ class PIBTConfig(NavigatorOption):
         patience: Timesteps a busy robot may go without getting nearer its goal before
             its priority is drawn at random each timestep (priority rotation).
         record: Keep every robot's cell at every timestep, for the conflict checker and
-            the renderer (``4 M`` bytes per timestep).
+            the renderer (``4 M`` bytes per timestep). ``false``: rtaw-eval's episodes
+            are not checked against the schedule (there is none; PIBT itself keeps
+            robots on distinct cells), and nothing can render them.
         cache_mb: Memory of the distance fields kept (LRU), shared by the policy's
             queries and the robots' goals: lifelong fleets revisit cells (a robot
             decides at the delivery cell whose field it followed).
