@@ -9,9 +9,11 @@ Examples::
 ``POLICY`` is a shipped name or a checkpoint path; the ``KEY=VALUE`` options are the
 fields of :class:`~rtaw_marl.policies.export.ExportConfig`. The model is written only
 after it chose as the Python policy at every decision of a checked episode, with its
-specification beside it (``<output>.json``; docs/export.md). A user error (unknown
-policy or key, bad suffix or value) is one ``error:`` line and exit status 2; an export
-that disagrees with the policy is one line and exit status 1, and writes nothing.
+specification beside it (``<output>.json``; docs/export.md); the output is held for the
+run (another export to it is refused). A user error (unknown policy or key, bad suffix
+or value, a tolerance out of its range, an output that would replace the checkpoint) is
+one ``error:`` line and exit status 2, before any work; an export that disagrees with
+the policy is one line and exit status 1, and writes nothing.
 """
 
 from __future__ import annotations
@@ -51,7 +53,8 @@ def parse(options: list[str]) -> ExportConfig:
 
     Raises:
         ConfigError: An option without ``=``, an unknown key (the valid ones listed), a
-            key given twice, or a value of the wrong type.
+            key given twice, a value of the wrong type, or a tolerance out of its range
+            (:func:`~rtaw_marl.policies.export.check_tolerance`).
     """
     valid = [f.name for f in dataclasses.fields(ExportConfig)]
     values: dict[str, Any] = {}
@@ -79,8 +82,9 @@ def _value(key: str, text: str) -> Any:
         raise ConfigError(f"{key} must be {name}, got {text!r}") from None
     if kind is int and key != "seed" and value < 1:
         raise ConfigError(f"{key} must be an integer >= 1, got {text!r}")
-    if (kind is float and not value >= 0) or (key == "seed" and value < 0):
+    if key == "seed" and value < 0:
         raise ConfigError(f"{key} must be >= 0, got {text!r}")
+    # atol and rtol: ExportConfig checks their range, for the Python API too.
     return value
 
 

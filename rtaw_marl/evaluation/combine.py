@@ -22,7 +22,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.journal import NOT_SETTING
-from rtaw_marl.evaluation.results_file import check_results
+from rtaw_marl.evaluation.results_file import read_results
 from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
 
 __all__ = [
@@ -51,14 +51,15 @@ class Job:
         overrides: Its job's command-line overrides by key (``None``: no
             ``.hydra/overrides.yaml`` beside it).
         seeds: The episode seeds.
-        policies: ``{policy: {metric: [per seed]}}``.
+        policies: ``{policy: {metric: [per seed]}}`` (TTD always a number; another
+            metric may be ``None`` where it was not finite).
     """
 
     path: Path
     setting: dict[str, str]
     overrides: dict[str, str] | None
     seeds: list[int]
-    policies: dict[str, dict[str, list[float]]]
+    policies: dict[str, dict[str, list[float | None]]]
 
 
 @dataclass
@@ -128,22 +129,21 @@ def _natural(path: Path) -> list[Any]:
 
 
 def load_jobs(paths: Iterable[str | Path]) -> list[Job]:
-    """The jobs of :func:`find_results`, checked.
+    """The jobs of :func:`find_results`, each file checked in full
+    (:func:`~rtaw_marl.evaluation.results_file.read_results`) before any is used.
 
     Raises:
-        ConfigError: A file is not readable JSON or not an ``rtaw-eval`` results file.
+        ConfigError: A file is not readable JSON or not an ``rtaw-eval`` results file,
+            or a job's ``.hydra/overrides.yaml`` is not a list of overrides.
     """
     return [_load(path) for path in find_results(paths)]
 
 
 def _load(path: Path) -> Job:
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot be read as JSON ({exc})") from None
-    seeds, policies, config = check_results(data, path)
-    setting = {k: v for k, v in config.items() if k not in NOT_SETTING}
-    return Job(path, dict(_flatten(setting)), _overrides(path), seeds, policies)
+    results = read_results(path)  # the whole file checked before any of it is used
+    setting = {k: v for k, v in results.config.items() if k not in NOT_SETTING}
+    policies = {name: dict(metrics) for name, metrics in results.policies.items()}
+    return Job(path, dict(_flatten(setting)), _overrides(path), results.seeds, policies)
 
 
 def evaluated_policies(jobs: Sequence[Job]) -> list[str]:
@@ -161,23 +161,46 @@ def _flatten(config: Mapping[str, Any], prefix: str = "") -> Iterable[tuple[str,
 
 def _overrides(path: Path) -> dict[str, str] | None:
     """The job's overrides (``.hydra/overrides.yaml``) by key, without the options
-    that are no setting; ``None`` when the file is not there."""
+    that are no setting; ``None`` when the file is not there.
+
+    Raises:
+        ConfigError: The file cannot be read, or is not what Hydra writes there (a list
+            of ``KEY=VALUE`` strings); the message names it.
+    """
     file = path.parent / ".hydra" / "overrides.yaml"
     if not file.is_file():
         return None
-    import yaml  # omegaconf's dependency: the cli extra
-
-    try:
-        items = yaml.safe_load(file.read_text()) or []
-    except (OSError, yaml.YAMLError) as exc:
-        raise ConfigError(f"{file}: cannot be read ({exc})") from None
     out: dict[str, str] = {}
-    for item in map(str, items):
+    for item in _override_items(file):
         key, _, value = item.partition("=")
         key = key.lstrip("+~")
         if key.split(".")[0].split("/")[0] not in (*NOT_SETTING, "hydra"):
             out[key] = value
     return out
+
+
+def _override_items(file: Path) -> list[str]:
+    """The strings of an overrides file, checked: Hydra writes a list of them."""
+    import yaml  # omegaconf's dependency: the cli extra
+
+    try:
+        items = yaml.safe_load(file.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise ConfigError(f"{file}: cannot be read ({_first_line(exc)})") from None
+    except RecursionError:  # PyYAML composes nested nodes recursively
+        raise ConfigError(f"{file}: nested too deeply to be a Hydra overrides list") from None
+    if items is None:  # an empty file: a job run without overrides
+        return []
+    if not isinstance(items, list) or not all(isinstance(item, str) for item in items):
+        raise ConfigError(
+            f"{file}: not a Hydra overrides list (a list of KEY=VALUE strings, as "
+            "Hydra writes for each job)"
+        )
+    return items
+
+
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
 
 
 def _swept(jobs: Sequence[Job], settings: Sequence[dict[str, str]]) -> list[str]:

@@ -1,11 +1,25 @@
 """The combined table of a sweep (:mod:`rtaw_marl.evaluation.combine`) as markdown, CSV,
-JSON and a PNG plot, each written atomically."""
+JSON and a PNG plot, written as one set.
+
+:func:`render_combined` renders the four files in memory; :meth:`CombinedFiles.write`
+writes each to a temporary file beside its target and then renames all four in together
+with SIGINT and SIGTERM deferred (:func:`stops_deferred`), so a stop leaves either the
+previous files or the complete new set, never a mix (a crash or a full disk at any
+moment leaves no partial file).
+"""
 
 from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Sequence
+import json
+import os
+import signal
+import tempfile
+import threading
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -15,18 +29,36 @@ from rtaw_marl.evaluation.combine import Combined, Row
 from rtaw_marl.evaluation.report import (
     baseline_label,
     diff_cell,
+    json_safe,
     legend,
     markdown_table,
     mean_ci_cell,
-    write_json_atomic,
 )
 from rtaw_marl.evaluation.stats import mean_ci
-from rtaw_marl.utils.atomic import atomic_write
+from rtaw_marl.utils.atomic import disk_full_guard
+from rtaw_marl.utils.signals import STOP_SIGNALS
 
-__all__ = ["OUTPUT_STEM", "combined_payload", "combined_table", "write_combined"]
+__all__ = [
+    "OUTPUT_STEM",
+    "OUTPUT_SUFFIXES",
+    "CombinedFiles",
+    "combined_paths",
+    "combined_payload",
+    "combined_table",
+    "render_combined",
+    "stops_deferred",
+    "write_combined",
+]
 
 #: The combined files are ``<folder>/combined.{txt,csv,json,png}``.
 OUTPUT_STEM = "combined"
+#: Their suffixes, in the order they are listed.
+OUTPUT_SUFFIXES = ("txt", "csv", "json", "png")
+
+
+def combined_paths(folder: str | Path) -> dict[str, Path]:
+    """The combined files of ``folder`` by suffix: ``<folder>/combined.<suffix>``."""
+    return {suffix: Path(folder) / f"{OUTPUT_STEM}.{suffix}" for suffix in OUTPUT_SUFFIXES}
 
 
 def combined_table(combined: Combined, confidence: float = 0.95) -> str:
@@ -109,7 +141,7 @@ def _setting_label(row: Row) -> str:
     return "\n".join(f"{k}={v}" for k, v in row.setting.items()) or "all"
 
 
-def _plot(path: Path, combined: Combined, confidence: float) -> Path:
+def _plot(combined: Combined, confidence: float) -> bytes:
     """Grouped bars: mean TTD per setting and policy with its interval; beside it, the
     paired difference with the first baseline (when one was evaluated)."""
     from matplotlib.figure import Figure  # the cli extra; no pyplot state
@@ -150,22 +182,121 @@ def _plot(path: Path, combined: Combined, confidence: float) -> Path:
     for ax in axes:
         ax.set_xticks(x, settings, fontsize=8)
     axes[0].legend(fontsize=8)
-    return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=120))
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=120)
+    return buffer.getvalue()
+
+
+@dataclass
+class CombinedFiles:
+    """The combined files, rendered and not yet written (:func:`render_combined`).
+
+    Attributes:
+        paths: Each file's target by suffix (:func:`combined_paths`).
+        contents: Each file's bytes by suffix.
+        written: Whether :meth:`write` has renamed all of them in; set inside the block
+            that defers SIGINT and SIGTERM, so a stop handled right after it sees it.
+    """
+
+    paths: dict[str, Path]
+    contents: dict[str, bytes]
+    written: bool = field(default=False)
+
+    def write(self) -> dict[str, Path]:
+        """Write every file to a temporary beside its target (fsynced), then rename all
+        of them in with SIGINT and SIGTERM deferred (:func:`stops_deferred`); returns
+        the targets by suffix.
+
+        Raises:
+            DiskFullError: The disk filled up; no target was changed and no temporary
+                file is left.
+        """
+        staged: dict[str, Path] = {}
+        try:
+            for suffix, data in self.contents.items():
+                staged[suffix] = _temporary(self.paths[suffix], data)
+            # A signal here is handled after the block: every file or none is new.
+            with stops_deferred():
+                for suffix, temporary in staged.items():
+                    os.replace(temporary, self.paths[suffix])
+                self.written = True
+        finally:
+            for temporary in staged.values():  # gone once renamed; else the stop's leftovers
+                temporary.unlink(missing_ok=True)
+        return dict(self.paths)
+
+
+@contextmanager
+def stops_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM that arrive within the block are handled right after it.
+
+    The Python-level handlers are swapped for one that notes the signal, and the signal
+    is raised again once they are back. Not a signal mask
+    (:func:`~rtaw_marl.utils.signals.signals_held`): a mask holds the calling thread's
+    signals only, and the kernel hands a process's signal to any thread that does not
+    block it (one of numpy's, a tracker's, pytest's), whose C handler then has the
+    Python handler run in the main thread inside the block all the same. Outside the
+    main thread, or for a signal that is ignored, nothing changes.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    previous = {}
+    for signum in STOP_SIGNALS:
+        handler = signal.getsignal(signum)
+        # None: a handler installed outside Python, which cannot be restored; leave it.
+        if handler is not signal.SIG_IGN and handler is not None:
+            previous[signum] = signal.signal(signum, lambda s, _: pending.append(s))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for signum in dict.fromkeys(pending):
+            signal.raise_signal(signum)  # now handled as it would have been
+
+
+def render_combined(
+    folder: str | Path, combined: Combined, table: str, confidence: float = 0.95
+) -> CombinedFiles:
+    """``combined.txt`` (``table``), ``.csv``, ``.json`` and ``.png`` for ``folder``,
+    rendered in memory; nothing is written yet (:meth:`CombinedFiles.write`)."""
+    payload = json_safe(combined_payload(combined, confidence))
+    contents = {
+        "txt": f"{table}\n".encode(),
+        "csv": _csv_text(combined, confidence).encode(),
+        "json": json.dumps(payload, indent=2, allow_nan=False).encode(),
+        "png": _plot(combined, confidence),
+    }
+    return CombinedFiles(combined_paths(folder), contents)
 
 
 def write_combined(
     folder: str | Path, combined: Combined, table: str, confidence: float = 0.95
 ) -> dict[str, Path]:
-    """Write ``combined.txt`` (``table``), ``.csv``, ``.json`` and ``.png`` into
-    ``folder``, each atomically; returns them by suffix."""
-    folder = Path(folder)
-    stem = folder / OUTPUT_STEM
-    text, rows = f"{table}\n".encode(), _csv_text(combined, confidence).encode()
-    return {
-        "txt": atomic_write(stem.with_suffix(".txt"), lambda fh: fh.write(text)),
-        "csv": atomic_write(stem.with_suffix(".csv"), lambda fh: fh.write(rows)),
-        "json": write_json_atomic(
-            stem.with_suffix(".json"), combined_payload(combined, confidence)
-        ),
-        "png": _plot(stem.with_suffix(".png"), combined, confidence),
-    }
+    """Render and write ``combined.txt`` (``table``), ``.csv``, ``.json`` and ``.png``
+    into ``folder`` as one set (:meth:`CombinedFiles.write`); returns them by suffix."""
+    return render_combined(folder, combined, table, confidence).write()
+
+
+def _temporary(path: Path, data: bytes) -> Path:
+    """``data`` in a new fsynced file beside ``path``, named as
+    :func:`~rtaw_marl.utils.atomic.temp_name` says (``.combined.csv.XXXXXXXX.tmp``)."""
+    kept = f"the previous {path.name} is kept" if path.exists() else f"no {path.name} was written"
+    with disk_full_guard(path, kept):
+        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        temporary = Path(name)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                # mkstemp creates the file 0600; give it the usual permissions instead.
+                umask = os.umask(0)
+                os.umask(umask)
+                os.fchmod(fh.fileno(), 0o666 & ~umask)
+                fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
+        except BaseException:
+            temporary.unlink(missing_ok=True)
+            raise
+    return temporary

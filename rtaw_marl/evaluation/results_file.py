@@ -11,23 +11,41 @@
     }
 
 The same per-episode values as a tidy table are ``results.csv``
-(:mod:`rtaw_marl.evaluation.tidy`).
+(:mod:`rtaw_marl.evaluation.tidy`). :func:`read_results` is the one reader: it checks a
+file in full (:func:`check_results`) before any of it is used, and names the file in
+its one-line error.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.report import comparisons
+from rtaw_marl.sim.inputs import seed_list
 
-__all__ = ["REQUIRED_KEYS", "check_results", "results_payload"]
+__all__ = [
+    "MAX_DEPTH",
+    "REQUIRED_KEYS",
+    "ResultsFile",
+    "check_results",
+    "read_results",
+    "results_payload",
+]
 
 #: The keys every results file has (a reader refuses a file without them).
 REQUIRED_KEYS = ("config", "seeds", "policies")
+
+#: How deep a results file may nest. Its deepest entries (a comparison's interval,
+#: ``comparisons.<policy>.vs.<baseline>.ci``) are 6 levels down and a config's groups a
+#: few more; a deeper file is no results file, and would make the readers that recurse
+#: (JSON's, the config's flattening) hit Python's recursion limit.
+MAX_DEPTH = 32
 
 
 def results_payload(
@@ -60,23 +78,154 @@ def results_payload(
     }
 
 
-def check_results(data: Any, path: str | Path) -> tuple[list[int], dict[str, Any], dict]:
-    """``(seeds, policies, config)`` of a loaded results file, checked.
+@dataclass(frozen=True)
+class ResultsFile:
+    """A ``results.json``, read and checked in full by :func:`read_results`.
+
+    Attributes:
+        path: The file.
+        config: The evaluation's resolved config.
+        seeds: The episode seeds: distinct integers >= 0.
+        policies: ``{policy: {metric: [one value per seed]}}``; every ``ttd`` value a
+            finite number, every other metric's a finite number or ``null``.
+        comparisons: ``{policy: {...}}`` as ``rtaw-eval`` wrote them (``{}`` when absent).
+        lower_bound: The TTD lower bound per seed, or None.
+        lower_bound_time_s: What computing it took, or None.
+    """
+
+    path: Path
+    config: dict[str, Any]
+    seeds: list[int]
+    policies: dict[str, dict[str, list[float | None]]]
+    comparisons: dict[str, Any]
+    lower_bound: list[float] | None
+    lower_bound_time_s: float | None
+
+
+def read_results(path: str | Path) -> ResultsFile:
+    """Read a ``results.json`` and check all of it before any of it is used.
+
+    The one reader of the schema: every other reader (``rtaw-results``) goes through it.
 
     Raises:
-        ConfigError: A required key is missing, or a policy has no finite TTD per seed.
+        ConfigError: The file cannot be read, is not strict JSON, nests deeper than
+            :data:`MAX_DEPTH`, or breaks the schema (:func:`check_results`); the
+            message names the file.
     """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot be read ({_reason(exc)})") from None
+    try:
+        data = json.loads(text, parse_constant=_no_constant)
+    except ValueError as exc:  # a JSONDecodeError, or NaN or Infinity (_no_constant)
+        raise ConfigError(f"{path}: cannot be read as JSON ({exc})") from None
+    except RecursionError:
+        # The parser recurses once per level: a file nested thousands deep is no results
+        # file, and the limit it hit is the interpreter's, not a fact about the file.
+        raise ConfigError(_too_deep(path)) from None
+    return check_results(data, path)
+
+
+def check_results(data: Any, path: str | Path) -> ResultsFile:
+    """``data``, a loaded results file, checked in full.
+
+    Raises:
+        ConfigError: It nests deeper than :data:`MAX_DEPTH`, a required key is missing,
+            ``config`` is no object, ``seeds`` are not distinct integers >= 0, a policy
+            has no finite TTD per seed, a metric has no value per seed, or the optional
+            entries have the wrong shape.
+    """
+    path = Path(path)
+    # First, without recursion: everything after (and every user of the file) may recurse.
+    if _depth(data) > MAX_DEPTH:
+        raise ConfigError(_too_deep(path))
     if not isinstance(data, dict) or not set(REQUIRED_KEYS) <= set(data):
         raise ConfigError(f"{path}: not an rtaw-eval results file ({', '.join(REQUIRED_KEYS)})")
-    seeds, policies = data["seeds"], data["policies"]
-    if not isinstance(seeds, list) or not isinstance(policies, dict) or not policies:
-        raise ConfigError(f"{path}: not an rtaw-eval results file (seeds, policies)")
+    if not isinstance(data["config"], dict):
+        raise ConfigError(f"{path}: config is {_kind(data['config'])}, not an object")
+    try:
+        seeds = seed_list(data["seeds"], "seeds")
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+    policies = _policies(data["policies"], len(seeds), path)
+    comparisons = data.get("comparisons", {})
+    if not isinstance(comparisons, dict) or not all(
+        isinstance(v, dict) for v in comparisons.values()
+    ):
+        raise ConfigError(f"{path}: comparisons is not an object of one object per policy")
+    bound, bound_time = data.get("lower_bound"), data.get("lower_bound_time_s")
+    if bound is not None and not (
+        isinstance(bound, list) and len(bound) == len(seeds) and all(map(_number, bound))
+    ):
+        raise ConfigError(f"{path}: lower_bound is not null or one number per seed")
+    if bound_time is not None and not (_number(bound_time) and bound_time >= 0):
+        raise ConfigError(f"{path}: lower_bound_time_s is not null or a number >= 0")
+    return ResultsFile(path, data["config"], seeds, policies, comparisons, bound, bound_time)
+
+
+def _policies(policies: Any, n: int, path: Path) -> dict[str, dict[str, list[float | None]]]:
+    """``policies`` checked: an object of policies, each an object of per-seed lists."""
+    if not isinstance(policies, dict) or not policies:
+        raise ConfigError(f"{path}: policies is not an object of one or more policies")
     for name, metrics in policies.items():
         ttd = metrics.get("ttd") if isinstance(metrics, dict) else None
-        if not isinstance(ttd, list) or len(ttd) != len(seeds) or not all(map(_number, ttd)):
-            raise ConfigError(f"{path}: policy {name} has no TTD per seed ({len(seeds)} seeds)")
-    config = data["config"] if isinstance(data["config"], dict) else {}
-    return seeds, policies, config
+        if not isinstance(ttd, list) or len(ttd) != n or not all(map(_number, ttd)):
+            raise ConfigError(f"{path}: policy {name} has no TTD per seed ({n} seeds)")
+        for metric, values in metrics.items():
+            if (
+                not isinstance(values, list)
+                or len(values) != n
+                or not all(v is None or _number(v) for v in values)
+            ):
+                raise ConfigError(
+                    f"{path}: policy {name}: metric {metric} is not one number (or null) "
+                    f"per seed ({n} seeds)"
+                )
+    return policies
+
+
+def _depth(data: Any) -> int:
+    """How deep ``data`` nests (a scalar 0, ``[]`` 1, ``[[]]`` 2), found iteratively and
+    stopping once past :data:`MAX_DEPTH`."""
+    deepest, stack = 0, [(data, 0)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, (dict, list)):
+            depth += 1
+            deepest = max(deepest, depth)
+            if deepest > MAX_DEPTH:
+                break
+            stack.extend((v, depth) for v in (value.values() if isinstance(value, dict) else value))
+    return deepest
+
+
+def _too_deep(path: Path) -> str:
+    return (
+        f"{path}: nested more than {MAX_DEPTH} levels deep; not an rtaw-eval results file "
+        "(its deepest entries are a few levels down)"
+    )
+
+
+def _no_constant(name: str) -> None:
+    """``NaN``, ``Infinity``: not strict JSON, and never in a file ``rtaw-eval`` wrote
+    (it writes ``null`` for a non-finite value)."""
+    raise ValueError(f"{name} is not strict JSON")
+
+
+def _reason(exc: OSError | UnicodeDecodeError) -> str:
+    if isinstance(exc, OSError):
+        return exc.strerror or type(exc).__name__
+    return "not UTF-8 text"
+
+
+def _kind(value: Any) -> str:
+    """A JSON value's type, for a message (never a Python repr of the value)."""
+    names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean"}
+    if value is None:
+        return "null"
+    return names.get(type(value), "a number")
 
 
 def _number(value: Any) -> bool:

@@ -26,6 +26,9 @@ import importlib.util
 import io
 import json
 import logging
+import math
+import numbers
+import os
 import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -51,15 +54,17 @@ from rtaw_marl.policies.export_check import CheckReport, Runner, check_exported,
 from rtaw_marl.policies.export_spec import DIMS, NORMALISATION, OUTPUT, input_spec
 from rtaw_marl.policies.network import checkpoint_path, load_policy
 from rtaw_marl.utils.atomic import atomic_write
-from rtaw_marl.utils.runs import check_writable_file
+from rtaw_marl.utils.runs import claim_file
 
 __all__ = [
     "EXPORT_FORMAT",
     "FORMATS",
     "SPEC_NAME",
+    "TOLERANCES",
     "ExportCheckError",
     "ExportConfig",
     "MaskedActor",
+    "check_tolerance",
     "export_format",
     "export_policy",
     "load_exported",
@@ -75,6 +80,43 @@ SPEC_NAME = "rtaw_export.json"
 #: Sizes of the made-up tracing inputs: unlike any real queue or fleet, so that every
 #: check also exercises the dynamic dimensions.
 _TRACE = {"batch": 2, "tasks": 3, "robots": 4}
+
+
+#: ``atol`` and ``rtol`` -> (largest value, why): past it the check checks nothing.
+#: Logits reach the hundreds; float32 rounding alone is about 1e-7 of a logit, and
+#: onnxruntime's reordering 1.5e-4 at 290 (docs/export.md).
+TOLERANCES: dict[str, tuple[float, str]] = {
+    "atol": (
+        1.0,
+        "a logit difference of 1 already scales a slot's probability by e (2.7), so a "
+        "larger atol would let a different policy pass",
+    ),
+    "rtol": (
+        0.01,
+        "1% of a logit in the hundreds is several units while float32 rounding is about "
+        "1e-7 of it, so a larger rtol would let a different policy pass",
+    ),
+}
+
+
+def check_tolerance(key: str, value: object) -> float:
+    """``value`` of the tolerance ``key`` (``atol``, ``rtol``), checked: a finite number
+    from 0 to its :data:`TOLERANCES` limit. ``inf`` would switch the check off, and a
+    huge one overflows float32 and fails every logit.
+
+    Raises:
+        ConfigError: Not a number, not finite, negative or over the limit; the message
+            gives the range and why.
+    """
+    limit, why = TOLERANCES[key]
+    if not isinstance(value, numbers.Real) or isinstance(value, bool):
+        raise ConfigError(
+            f"{key} must be a number >= 0 and <= {limit:g}, got {value!r} ({type(value).__name__})"
+        )
+    number = float(value)
+    if not (math.isfinite(number) and 0 <= number <= limit):
+        raise ConfigError(f"{key} must be >= 0 and <= {limit:g}, got {number:g}: {why}")
+    return number
 
 
 class ExportCheckError(RtawError):
@@ -140,8 +182,13 @@ class ExportConfig:
         num_tasks: Decisions checked (the episode's length).
         seed: The checked episode's seed.
         atol: Absolute tolerance of the check: every logit of the exported model must be
-            within ``atol + rtol * |logit|`` of the Python network's.
-        rtol: Relative tolerance of the check.
+            within ``atol + rtol * |logit|`` of the Python network's; from 0 to 1
+            (:data:`TOLERANCES`).
+        rtol: Relative tolerance of the check; from 0 to 0.01.
+
+    Raises:
+        ConfigError: ``atol`` or ``rtol`` is not a finite number in its range
+            (:func:`check_tolerance`).
     """
 
     output: str = ""
@@ -155,6 +202,10 @@ class ExportConfig:
     seed: int = 0
     atol: float = 1e-4
     rtol: float = 1e-4
+
+    def __post_init__(self) -> None:
+        for key in TOLERANCES:
+            check_tolerance(key, getattr(self, key))
 
     def env_args(self) -> dict[str, Any]:
         """The ``warehouse_v1.env`` arguments of the checked episode."""
@@ -253,6 +304,9 @@ def load_exported(data: bytes, fmt: str) -> Runner:
 def export_policy(source: str | Path, config: ExportConfig) -> tuple[Path, CheckReport]:
     """Export a policy's actor, check it on a recorded episode, then write it.
 
+    The output is held for the run (:func:`~rtaw_marl.utils.runs.claim_file`: another
+    export to it is refused) and must not be one of the inputs.
+
     Args:
         source: A checkpoint path or a shipped policy name (as :func:`load_policy`).
         config: The output file and the checked episode.
@@ -261,8 +315,9 @@ def export_policy(source: str | Path, config: ExportConfig) -> tuple[Path, Check
         The written model's path and the check's report.
 
     Raises:
-        ConfigError: Unknown policy, bad suffix, unwritable output, a missing ``export``
-            extra, bad env arguments.
+        ConfigError: Unknown policy, bad suffix, unwritable output or one in use, an
+            output (or its ``.json``) that is the checkpoint or another input, a missing
+            ``export`` extra, bad env arguments.
         ExportCheckError: The exported model disagrees with the policy (nothing written).
     """
     if not config.output:
@@ -270,8 +325,17 @@ def export_policy(source: str | Path, config: ExportConfig) -> tuple[Path, Check
     fmt = export_format(config.output)
     if fmt == "onnx":
         _need_onnx()
-    output = check_writable_file(config.output)
     path = checkpoint_path(source)
+    _check_not_inputs(config, path)
+    sidecar = f"{Path(config.output).name}.json"
+    with claim_file(config.output, siblings=(sidecar,)) as output:
+        return _export(source, path, output, fmt, config)
+
+
+def _export(
+    source: str | Path, path: Path, output: Path, fmt: str, config: ExportConfig
+) -> tuple[Path, CheckReport]:
+    """The work of :func:`export_policy`, once its output is held."""
     policy = load_policy(path, name=str(source))
     env = config.env_args()
     inputs, actions = record_decisions(policy, env, config.seed)
@@ -294,6 +358,38 @@ def export_policy(source: str | Path, config: ExportConfig) -> tuple[Path, Check
     sidecar = json.dumps({**spec, "check": {**asdict(report), "ok": report.ok}}, indent=1)
     atomic_write(Path(f"{output}.json"), lambda fh: fh.write(sidecar.encode()))
     return output, report
+
+
+def _check_not_inputs(config: ExportConfig, checkpoint: Path) -> None:
+    """Refuse an output, or its ``<output>.json``, that would replace an input: the
+    checkpoint, or a layout or task file named by ``layout=`` or ``tasks=``.
+
+    Files are compared by where they really are (symlinks, ``..`` and relative paths
+    resolved), and by the name in the resolved folder (an atomic write replaces that
+    name, which may be a symlink to the input).
+    """
+    inputs = {"the checkpoint being exported": checkpoint}
+    for key in ("layout", "tasks"):
+        value = getattr(config, key)
+        if value is not None and os.path.isfile(value):
+            inputs[f"the {key} file"] = Path(value)
+    places = {place: (what, p) for what, p in inputs.items() for place in _places(p)}
+    output = Path(config.output)
+    for target in (output, Path(f"{output}.json")):
+        hit = next((places[p] for p in _places(target) if p in places), None)
+        if hit is None:
+            continue
+        what, path = hit
+        written = "the model" if target == output else f"its specification {target.name}"
+        raise ConfigError(
+            f"output={config.output}: {written} would replace {what} ({path}); "
+            "choose another output file"
+        )
+
+
+def _places(path: Path) -> set[str]:
+    """Where ``path`` is: the file it resolves to, and the name in its resolved folder."""
+    return {os.path.realpath(path), os.path.join(os.path.realpath(path.parent), path.name)}
 
 
 def _need_onnx() -> None:

@@ -5,11 +5,25 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
+from rtaw_marl.evaluation import combine_output
+from rtaw_marl.evaluation.combine_output import OUTPUT_SUFFIXES
+from rtaw_marl.utils.runs import LOCK_NAME, claim_folder
+from rtaw_marl.utils.signals import Interrupted
+
 pytestmark = pytest.mark.integration
+
+RTAW_RESULTS = Path(sys.executable).with_name("rtaw-results")
 
 TINY = ["env.num_tasks=20", "policy=[mpdm,rbts]", "seeds=[0,1]", "progress=false"]
 
@@ -115,6 +129,14 @@ def _job(folder: Path, payload: object, overrides: list[str] | None = None) -> P
     return folder / "results.json"
 
 
+def _nested(depth: int) -> dict:
+    """``{"a": {"a": ... {}}}``, ``depth`` objects deep (built without recursion)."""
+    inner: dict = {}
+    for _ in range(depth - 1):
+        inner = {"a": inner}
+    return inner
+
+
 def _payload(robots: int, seeds: list[int], ttd: dict[str, list[float]]) -> dict:
     return {
         "config": {"env": {"num_robots": robots}, "policy": list(ttd), "seeds": seeds},
@@ -139,7 +161,33 @@ def _payload(robots: int, seeds: list[int], ttd: dict[str, list[float]]) -> dict
           "1": _payload(3, [0, 2], {"rbts": [1.0, 3.0]})},
          "error: the setting: {root}/0/results.json has seeds [0, 1], {root}/1/results.json "
          "[0, 2]; paired comparisons need the same seeds"),
+        # rtaw-eval refuses a seed listed twice: it would narrow every interval.
+        ({"0": _payload(3, [0, 0], {"mpdm": [1.0, 1.0]})},
+         "error: {root}/0/results.json: seeds lists a seed more than once: 0 (2 times); "
+         "each seed is one episode, list it once"),
+        ({"0": _payload(3, [0, -1], {"mpdm": [1.0, 1.0]})},
+         "error: {root}/0/results.json: seeds[1] must be an integer >= 0, got -1"),
+        ({"0": {**_payload(3, [0], {"mpdm": [1.0]}), "config": [1]}},
+         "error: {root}/0/results.json: config is a list, not an object"),
+        ({"0": {**_payload(3, [0], {"mpdm": [1.0]}),
+                "policies": {"mpdm": {"ttd": [1.0], "makespan": [1.0, 2.0]}}}},
+         "error: {root}/0/results.json: policy mpdm: metric makespan is not one number (or "
+         "null) per seed (1 seeds)"),
+        ({"0": {**_payload(3, [0], {"mpdm": [1.0]}), "lower_bound": [1.0, 2.0]}},
+         "error: {root}/0/results.json: lower_bound is not null or one number per seed"),
+        ({"0": '{"config": {}, "seeds": [0], "policies": {"mpdm": {"ttd": [NaN]}}}'},
+         "error: {root}/0/results.json: cannot be read as JSON (NaN is not strict JSON)"),
+        # Too deep for Python's JSON parser (a RecursionError inside it) ...
+        ({"0": '{"config": ' + "[" * 200_000 + "]" * 200_000 + "}"},
+         "error: {root}/0/results.json: nested more than 32 levels deep; not an rtaw-eval "
+         "results file"),
+        # ... and parsed, but too deep for what reads it next (the config's flattening).
+        ({"0": {**_payload(3, [0], {"mpdm": [1.0]}), "config": _nested(500)}},
+         "error: {root}/0/results.json: nested more than 32 levels deep"),
     ],
+    ids=["none", "not-json", "foreign", "short-ttd", "same-policy", "other-seeds",
+         "duplicate-seeds", "negative-seed", "config-list", "short-metric", "bound",
+         "nan", "deep-parse", "deep-config"],
 )  # fmt: skip
 def test_bad_input_is_one_line_and_status_2(cli, tmp_path: Path, jobs: dict, message: str) -> None:
     root = tmp_path / "bad"
@@ -176,3 +224,180 @@ def test_settings_are_named_by_the_overrides_that_differ(cli, tmp_path: Path) ->
     result = cli("results", str(root), "--compare-to", "hungarian")
     assert result.code == 2
     assert "evaluated: mpdm, rbts" in result.err
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("5\n", "not a Hydra overrides list (a list of KEY=VALUE strings"),
+        ("- env.num_robots=3\n- {a: 1}\n", "not a Hydra overrides list"),
+        ("- [unclosed\n", "cannot be read ("),
+        ("[" * 200_000 + "]" * 200_000, "nested too deeply to be a Hydra overrides list"),
+    ],
+    ids=["a-number", "not-strings", "bad-yaml", "deep"],
+)
+def test_a_bad_overrides_file_is_one_line_naming_it(
+    cli, tmp_path: Path, text: str, message: str
+) -> None:
+    root = tmp_path / "s"
+    _job(root / "0", _payload(3, [0], {"mpdm": [2.0]}), [])
+    overrides = root / "0" / ".hydra" / "overrides.yaml"
+    overrides.write_text(text)
+    result = cli("results", str(root))
+    assert result.code == 2
+    assert result.out == ""
+    assert result.err.startswith(f"error: {overrides.resolve()}: {message}")
+    assert len(result.err.splitlines()) == 1
+    assert not list(root.glob("combined.*"))
+
+
+@pytest.mark.parametrize("through", ["the-folder", "a-symlinked-folder", "a-relative-path"])
+def test_an_output_that_is_an_input_is_refused_before_any_work(
+    cli, tmp_path: Path, through: str
+) -> None:
+    """``rtaw-results DIR/combined.json --output DIR`` would replace its own input."""
+    folder = tmp_path / "d"
+    folder.mkdir()
+    given = folder / "combined.json"
+    given.write_text(json.dumps(_payload(3, [0, 1], {"mpdm": [1.0, 2.0]})))
+    before = given.read_bytes()
+    output = {"the-folder": str(folder), "a-symlinked-folder": "link",
+              "a-relative-path": "d/../d/"}[through]  # fmt: skip
+    (tmp_path / "link").symlink_to(folder)
+    result = cli("results", str(given), "--output", output)
+    assert result.code == 2
+    assert result.out == ""
+    assert result.err == (
+        f"error: --output {Path(output)}: combined.json would overwrite the input "
+        f"{given}; choose another --output folder\n"
+    )
+    assert given.read_bytes() == before
+    assert sorted(p.name for p in folder.iterdir()) == ["combined.json"]  # no lock either
+
+
+def test_the_output_folder_is_held_while_the_files_are_written(cli, tmp_path: Path) -> None:
+    root = tmp_path / "s"
+    _job(root / "0", _payload(3, [0], {"mpdm": [2.0], "rbts": [1.0]}))
+    out = tmp_path / "out"
+    with claim_folder(out):
+        result = cli("results", str(root), "--output", str(out))
+        assert result.code == 2
+        assert result.err == (
+            f"error: --output={out} is in use by another running process (pid {os.getpid()}); "
+            "choose another one\n"
+        )
+        assert not list(out.glob("combined.*"))
+    result = cli("results", str(root), "--output", str(out))
+    assert result.code == 0, result.err
+    # The lock is gone once the run ends; the four files are there.
+    assert sorted(p.name for p in out.iterdir()) == [
+        "combined.csv", "combined.json", "combined.png", "combined.txt"
+    ]  # fmt: skip
+
+
+# ------------------------------------------------------------------ stops
+def _old_set(out: Path) -> dict[str, bytes]:
+    """A previous run's combined files (made-up contents)."""
+    out.mkdir()
+    old = {}
+    for suffix in OUTPUT_SUFFIXES:
+        path = out / f"combined.{suffix}"
+        path.write_bytes(f"old {suffix}".encode())
+        old[path.name] = path.read_bytes()
+    return old
+
+
+def _contents(out: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(out.iterdir())}
+
+
+@pytest.mark.parametrize(
+    ("stop", "status"),
+    [(KeyboardInterrupt(), 130), (Interrupted(signum=signal.SIGTERM), 143)],
+    ids=["ctrl-c", "sigterm"],
+)
+def test_a_stop_while_writing_leaves_the_previous_set(
+    cli, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, stop: KeyboardInterrupt, status: int
+) -> None:
+    """Stopped after two of the four new files are on disk (as temporaries): the old
+    set is left whole, no temporary or lock is left, one line, 128 + signal."""
+    root = tmp_path / "s"
+    _job(root / "0", _payload(3, [0, 1], {"mpdm": [2.0, 3.0], "rbts": [1.0, 2.0]}))
+    out = tmp_path / "out"
+    old = _old_set(out)
+    temporary, calls = combine_output._temporary, []
+
+    def stopping(path: Path, data: bytes) -> Path:
+        calls.append(path.name)
+        if len(calls) == 3:
+            raise stop
+        return temporary(path, data)
+
+    monkeypatch.setattr(combine_output, "_temporary", stopping)
+    result = cli("results", str(root), "--output", str(out))
+    assert result.code == status
+    assert result.err == (
+        f"interrupted: nothing written; any combined.{{txt,csv,json,png}} in {out} are as "
+        "they were\n"
+    )
+    assert _contents(out) == old  # no temporary, no lock, the old files as they were
+
+
+def test_a_signal_while_renaming_lets_the_whole_set_in(
+    cli, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A real SIGTERM that arrives while the files are renamed in waits until all four
+    are in: the line says so, exit 143."""
+    root = tmp_path / "s"
+    _job(root / "0", _payload(3, [0, 1], {"mpdm": [2.0, 3.0], "rbts": [1.0, 2.0]}))
+    out = tmp_path / "out"
+    old = _old_set(out)
+    deferred = combine_output.stops_deferred
+
+    @contextmanager
+    def signalled() -> Iterator[None]:
+        with deferred():
+            os.kill(os.getpid(), signal.SIGTERM)  # handled once the block ends
+            yield
+
+    monkeypatch.setattr(combine_output, "stops_deferred", signalled)
+    result = cli("results", str(root), "--output", str(out))
+    assert result.code == 143
+    assert result.err == f"interrupted: combined.{{txt,csv,json,png}} were all written to {out}\n"
+    new = _contents(out)
+    assert sorted(new) == sorted(old)
+    assert all(new[name] != old[name] for name in old)
+    assert json.loads(new["combined.json"])["rows"][0]["policy"] == "mpdm"
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_sigterm_during_a_long_combine_writes_nothing(tmp_path: Path) -> None:
+    """A real SIGTERM to the console script while it combines and plots 300 jobs (it
+    holds its output folder by then): one line, exit 143, no combined file and no lock
+    left."""
+    root = tmp_path / "sweep"
+    for i in range(300):
+        _job(root / str(i), _payload(i + 1, [0, 1], {"mpdm": [2.0 + i, 3.0], "rbts": [1.0, 2.0]}))
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [str(RTAW_RESULTS), str(root), "--output", str(out)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        # The lock is taken inside the SIGTERM handler's block, once the files are read
+        # and before the seconds of plotting 300 settings.
+        deadline = time.monotonic() + 60
+        while proc.poll() is None and not (out / LOCK_NAME).exists():
+            assert time.monotonic() < deadline, "rtaw-results never took its output folder"
+            time.sleep(0.01)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 143, err
+    assert err == (
+        f"interrupted: nothing written; any combined.{{txt,csv,json,png}} in {out} are as "
+        "they were\n"
+    )
+    assert list(out.iterdir()) == []

@@ -9,7 +9,8 @@ frames collected so far. Every backend gets the same calls.
 Modules: :mod:`.base` (:class:`Backend`, ``logger=none``, :class:`RunLogger`),
 :mod:`.csv_log`, :mod:`.tensorboard_log`, :mod:`.mlflow_log`, :mod:`.wandb_log` (one per
 backend; a package beyond the ``train`` extra is imported only when its logger is
-chosen), :mod:`.config` (the typed options, plain Python) and :mod:`.console`.
+chosen), :mod:`.config` (the typed options, plain Python), :mod:`.reachable` (is a
+tracking server there, asked before the run) and :mod:`.console`.
 """
 
 from __future__ import annotations
@@ -93,10 +94,18 @@ def build_logger(
 
 
 def check_installed(option: LoggerConfig | str) -> None:
-    """Fail before a run starts when its logger's package is not installed.
+    """Fail before a run starts when its logger cannot work: its tracking server does
+    not answer (``logger.tracking_uri``, asked once with a short timeout), or its
+    package is not installed.
+
+    The server is asked first, before the package is imported, so a server that is not
+    there is one line in seconds, with or without the package.
 
     Raises:
-        ConfigError: The package is missing (the message names the extra), or an
+        ConfigError: The server does not answer (the message names the option and the
+            reason), the package is missing (the message names the extra), or an
             unknown name.
     """
-    _backend(option)[1].check_installed()
+    option, backend = _backend(option)
+    backend.check_reachable(option)
+    backend.check_installed()

@@ -56,6 +56,15 @@ class Backend(ABC):
         install = f"pip install 'rtaw_marl[{cls.name}]'"
         return ConfigError(f"logger={cls.name} needs {package} (not installed): {install}")
 
+    @classmethod  # noqa: B027 (an optional hook: most backends have no server)
+    def check_reachable(cls, option: LoggerConfig) -> None:
+        """Fail before a run starts when ``option`` names a server that does not answer
+        (a backend with a server URI overrides this; by default there is none).
+
+        Raises:
+            ConfigError: The server does not answer (the message names the option).
+        """
+
     @classmethod
     def check_installed(cls) -> None:
         """Raise :meth:`not_installed` when the module in :attr:`requires` is missing."""

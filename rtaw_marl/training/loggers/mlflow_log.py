@@ -1,7 +1,9 @@
 """``logger=mlflow``: an MLflow run with every scalar and the resolved config as its
 parameters (the ``mlflow`` extra, imported only when this logger is chosen).
 
-No network by default: the run goes to a SQLite store in the run folder.
+No network by default: the run goes to a SQLite store in the run folder. A server's
+``http(s)`` URI is asked once before the run starts (:meth:`MLflowBackend.check_reachable`),
+so a server that is not there costs a few seconds and one line, not minutes of retries.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.training.loggers.base import Backend
 from rtaw_marl.training.loggers.config import LoggerConfig, MLflowLoggerConfig
+from rtaw_marl.training.loggers.reachable import check_http_server
 
 __all__ = ["MLflowBackend", "flat_params"]
 
@@ -103,6 +106,15 @@ class MLflowBackend(Backend):
             raise ConfigError(f"logger=mlflow: {uri}: {first}") from exc
         self.tracking_uri = uri
         self.run_id = self._run_id
+
+    @classmethod
+    def check_reachable(cls, option: LoggerConfig) -> None:
+        """Refuse an ``http(s)`` ``logger.tracking_uri`` whose server does not answer in
+        a few seconds (:func:`~.reachable.check_http_server`): MLflow's client would
+        retry it silently for minutes (259 s) before failing."""
+        uri = getattr(option, "tracking_uri", None)
+        if uri is not None:
+            check_http_server(uri, "logger.tracking_uri")
 
     @classmethod
     def start(cls, option: LoggerConfig, run_dir: Path, config: Mapping[str, Any]) -> MLflowBackend:
