@@ -1,6 +1,6 @@
 """What the argparse commands (``rtaw-zoo``, ``rtaw-results``, ``rtaw-export``) share
 with the Hydra ones: one ``error: ...`` line and exit status 2 for bad input, status 1
-for a run that failed, ``interrupted`` and 130 for Ctrl-C."""
+for a run that failed, one ``interrupted`` line and 130 for Ctrl-C, 143 for SIGTERM."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from collections.abc import Callable
 from typing import NoReturn
 
 from rtaw_marl.errors import RtawError
+from rtaw_marl.utils.signals import Interrupted, terminate_as_interrupt
 
 __all__ = ["OneLineParser", "exit_after"]
 
@@ -44,14 +45,15 @@ def exit_after(
         describe: The one line printed for one of ``failures``.
     """
     try:
-        status = run(argv)
+        with terminate_as_interrupt():
+            status = run(argv)
     except failures as exc:
         print(f"error: {describe(exc)}", file=sys.stderr)
         sys.exit(1)
     except (RtawError, OSError) as exc:
         print(f"error: {_first_line(exc)}", file=sys.stderr)
         sys.exit(2)
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        sys.exit(130)
+    except KeyboardInterrupt as exc:
+        print(f"interrupted{': ' + str(exc) if str(exc) else ''}", file=sys.stderr)
+        sys.exit(exc.exit_status if isinstance(exc, Interrupted) else 130)
     sys.exit(status)

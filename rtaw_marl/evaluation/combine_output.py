@@ -3,7 +3,7 @@ JSON and a PNG plot, written as one set.
 
 :func:`render_combined` renders the four files in memory; :meth:`CombinedFiles.write`
 writes each to a temporary file beside its target and then renames all four in together
-with SIGINT and SIGTERM deferred (:func:`stops_deferred`), so a stop leaves either the
+with SIGINT and SIGTERM deferred (``signals_held``), so a stop leaves either the
 previous files or the complete new set, never a mix (a crash or a full disk at any
 moment leaves no partial file).
 """
@@ -14,11 +14,8 @@ import csv
 import io
 import json
 import os
-import signal
 import tempfile
-import threading
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,7 +33,7 @@ from rtaw_marl.evaluation.report import (
 )
 from rtaw_marl.evaluation.stats import mean_ci
 from rtaw_marl.utils.atomic import disk_full_guard
-from rtaw_marl.utils.signals import STOP_SIGNALS
+from rtaw_marl.utils.signals import signals_held
 
 __all__ = [
     "OUTPUT_STEM",
@@ -46,7 +43,6 @@ __all__ = [
     "combined_payload",
     "combined_table",
     "render_combined",
-    "stops_deferred",
     "write_combined",
 ]
 
@@ -204,7 +200,7 @@ class CombinedFiles:
 
     def write(self) -> dict[str, Path]:
         """Write every file to a temporary beside its target (fsynced), then rename all
-        of them in with SIGINT and SIGTERM deferred (:func:`stops_deferred`); returns
+        of them in with SIGINT and SIGTERM deferred (``signals_held``); returns
         the targets by suffix.
 
         Raises:
@@ -216,7 +212,7 @@ class CombinedFiles:
             for suffix, data in self.contents.items():
                 staged[suffix] = _temporary(self.paths[suffix], data)
             # A signal here is handled after the block: every file or none is new.
-            with stops_deferred():
+            with signals_held():
                 for suffix, temporary in staged.items():
                     os.replace(temporary, self.paths[suffix])
                 self.written = True
@@ -224,37 +220,6 @@ class CombinedFiles:
             for temporary in staged.values():  # gone once renamed; else the stop's leftovers
                 temporary.unlink(missing_ok=True)
         return dict(self.paths)
-
-
-@contextmanager
-def stops_deferred() -> Iterator[None]:
-    """SIGINT and SIGTERM that arrive within the block are handled right after it.
-
-    The Python-level handlers are swapped for one that notes the signal, and the signal
-    is raised again once they are back. Not a signal mask
-    (:func:`~rtaw_marl.utils.signals.signals_held`): a mask holds the calling thread's
-    signals only, and the kernel hands a process's signal to any thread that does not
-    block it (one of numpy's, a tracker's, pytest's), whose C handler then has the
-    Python handler run in the main thread inside the block all the same. Outside the
-    main thread, or for a signal that is ignored, nothing changes.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    pending: list[int] = []
-    previous = {}
-    for signum in STOP_SIGNALS:
-        handler = signal.getsignal(signum)
-        # None: a handler installed outside Python, which cannot be restored; leave it.
-        if handler is not signal.SIG_IGN and handler is not None:
-            previous[signum] = signal.signal(signum, lambda s, _: pending.append(s))
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        for signum in dict.fromkeys(pending):
-            signal.raise_signal(signum)  # now handled as it would have been
 
 
 def render_combined(

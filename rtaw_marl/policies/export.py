@@ -55,6 +55,7 @@ from rtaw_marl.policies.export_spec import DIMS, NORMALISATION, OUTPUT, input_sp
 from rtaw_marl.policies.network import checkpoint_path, load_policy
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.runs import claim_file
+from rtaw_marl.utils.signals import signals_held
 
 __all__ = [
     "EXPORT_FORMAT",
@@ -354,9 +355,11 @@ def _export(
     text = json.dumps(spec, indent=1)
     # The checked bytes, with the specification embedded (TorchScript: an extra file).
     data = _to_torchscript_with(data, text) if proto is None else _with_metadata(proto, text)
-    atomic_write(output, lambda fh: fh.write(data))
     sidecar = json.dumps({**spec, "check": {**asdict(report), "ok": report.ok}}, indent=1)
-    atomic_write(Path(f"{output}.json"), lambda fh: fh.write(sidecar.encode()))
+    # The model and its specification land together: a stop waits for both.
+    with signals_held():
+        atomic_write(output, lambda fh: fh.write(data))
+        atomic_write(Path(f"{output}.json"), lambda fh: fh.write(sidecar.encode()))
     return output, report
 
 

@@ -115,16 +115,31 @@ def deferred_interrupt() -> Iterator[StopRequest]:
 
 @contextmanager
 def signals_held() -> Iterator[None]:
-    """Hold SIGINT and SIGTERM (POSIX, main thread) until the block ends, then deliver.
+    """SIGINT and SIGTERM that arrive within the block are handled right after it.
 
     For a few lines that must happen together or not at all, such as a journal line
-    written and counted: a signal that arrives inside runs its handler right after.
+    written and counted, or a set of files renamed in. The Python-level handlers are
+    swapped for one that notes the signal, and the signal is raised again once they are
+    back. Not a signal mask: a mask holds the calling thread's signals only, and the
+    kernel hands a process's signal to any thread that does not block it (one of
+    numpy's, a tracker's, pytest's), whose C handler then has the Python handler run in
+    the main thread inside the block all the same. Outside the main thread, or for a
+    signal that is ignored, nothing changes.
     """
-    if not _main_thread() or not hasattr(signal, "pthread_sigmask"):
+    if not _main_thread():
         yield
         return
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    pending: list[int] = []
+    previous = {}
+    for signum in STOP_SIGNALS:
+        handler = signal.getsignal(signum)
+        # None: a handler installed outside Python, which cannot be restored; leave it.
+        if handler is not signal.SIG_IGN and handler is not None:
+            previous[signum] = signal.signal(signum, lambda s, _: pending.append(s))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for signum in dict.fromkeys(pending):
+            signal.raise_signal(signum)  # now handled as it would have been

@@ -352,7 +352,7 @@ def test_a_signal_while_renaming_lets_the_whole_set_in(
     _job(root / "0", _payload(3, [0, 1], {"mpdm": [2.0, 3.0], "rbts": [1.0, 2.0]}))
     out = tmp_path / "out"
     old = _old_set(out)
-    deferred = combine_output.stops_deferred
+    deferred = combine_output.signals_held
 
     @contextmanager
     def signalled() -> Iterator[None]:
@@ -360,7 +360,7 @@ def test_a_signal_while_renaming_lets_the_whole_set_in(
             os.kill(os.getpid(), signal.SIGTERM)  # handled once the block ends
             yield
 
-    monkeypatch.setattr(combine_output, "stops_deferred", signalled)
+    monkeypatch.setattr(combine_output, "signals_held", signalled)
     result = cli("results", str(root), "--output", str(out))
     assert result.code == 143
     assert result.err == f"interrupted: combined.{{txt,csv,json,png}} were all written to {out}\n"
