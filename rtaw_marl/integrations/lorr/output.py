@@ -213,7 +213,7 @@ def _mapf_deltas(codes: np.ndarray) -> np.ndarray:
     known = np.isin(codes, list(_MAPF_MOVES))
     if not known.all():
         t, r = np.argwhere(~known)[0]
-        raise ConfigError(f"robot {r}: unknown MAPF action {codes[t, r]!r} at timestep {t}")
+        raise ConfigError(f"robot {r}: unknown MAPF action {str(codes[t, r])!r} at timestep {t}")
     for letter, move in _MAPF_MOVES.items():
         delta[codes == letter] = move
     return delta
@@ -223,7 +223,7 @@ def _turning_deltas(codes: np.ndarray, heading0: np.ndarray) -> np.ndarray:
     known = np.isin(codes, ["F", "R", "C", "W", "T"])
     if not known.all():
         t, r = np.argwhere(~known)[0]
-        raise ConfigError(f"robot {r}: unknown MAPF_T action {codes[t, r]!r} at timestep {t}")
+        raise ConfigError(f"robot {r}: unknown MAPF_T action {str(codes[t, r])!r} at timestep {t}")
     turn = (codes == "R").astype(np.int64) - (codes == "C")
     # The heading during timestep t: the start's, turned by every action before t.
     before = np.concatenate([np.zeros((1, codes.shape[1]), np.int64), np.cumsum(turn, 0)[:-1]])
@@ -239,7 +239,8 @@ def _check_cells(positions: np.ndarray, layout: Layout) -> None:
     if not free.all():
         t, r = np.argwhere(~free)[0]
         raise ConfigError(
-            f"robot {r} is on a blocked or outside cell {tuple(positions[t, r])} at timestep {t}"
+            f"robot {r} is on a blocked or outside cell {tuple(positions[t, r].tolist())} at "
+            f"timestep {t}"
         )
 
 
