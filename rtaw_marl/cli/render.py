@@ -28,8 +28,8 @@ from rtaw_marl.cli.episode import note, play_checked
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.config import RenderConfig
 from rtaw_marl.sim.builder import build_sim
-from rtaw_marl.utils.runs import check_writable_file
 from rtaw_marl.viz.gif import render_gif
+from rtaw_marl.viz.output_file import claimed_output, config_inputs
 
 
 def run(cfg: DictConfig | RenderConfig) -> Path:
@@ -44,15 +44,20 @@ def run(cfg: DictConfig | RenderConfig) -> Path:
             f"navigator={cfg.navigator.name} moves robots independently (they pass through "
             "each other); render with navigator=sipp or navigator=cbs"
         )
-    # Checked before the episode is played and drawn, which can take minutes.
-    output = check_writable_file(
-        cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif"
-    )
+    output = Path(cfg.output or f"{HydraConfig.get().runtime.output_dir}/episode.gif")
     if output.suffix not in (".gif", ".json"):
         raise ConfigError(
             f"output must end in .gif (an animation) or .json (LoRR's output format), got "
             f"{str(output)!r}"
         )
+    # Claimed before the episode is played and drawn, which can take minutes: a second
+    # run writing the same file fails now, and a file the run reads is never replaced.
+    with claimed_output(output, config_inputs(cfg), progress=note) as output:
+        return _render(cfg, output)
+
+
+def _render(cfg: RenderConfig, output: Path) -> Path:
+    """Play the episode, check it, and write ``output`` (held by the caller)."""
     sim = build_sim(cfg.sim_spec())
     (name, policy), *_ = policies_from_cfg(cfg, [cfg.policy], sim).items()
     metrics, schedule = play_checked(sim, name, policy, int(cfg.seed))

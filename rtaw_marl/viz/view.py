@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -33,7 +34,7 @@ from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.viz.episode_data import encode, episode_arrays, layout_cells, pack
 
-__all__ = ["ViewEpisode", "file_size", "page", "write_view"]
+__all__ = ["ViewEpisode", "file_size", "fill", "page", "write_view"]
 
 MAX_EPISODES = 2
 """Episodes a page shows side by side."""
@@ -97,13 +98,30 @@ def page(
     }
     # "</" cannot end the inline script early once "<" is escaped (base64 has none).
     text = json.dumps(data, separators=(",", ":")).replace("<", "\\u003c")
-    return (
-        _asset("page.html")
-        .replace("__TITLE__", html.escape(title))
-        .replace("__STYLE__", _asset("viewer.css"))
-        .replace("__SCRIPT__", "\n".join(_asset(name) for name in SCRIPTS))
-        .replace("__DATA__", text)
-    )
+    parts = {
+        "TITLE": html.escape(title),
+        "STYLE": _asset("viewer.css"),
+        "SCRIPT": "\n".join(_asset(name) for name in SCRIPTS),
+        "DATA": text,
+    }
+    return fill(_asset("page.html"), parts)
+
+
+def fill(template: str, parts: dict[str, str]) -> str:
+    """``template`` with each ``__KEY__`` replaced by ``parts[KEY]``, in one pass.
+
+    One pass over the template only: a value is never searched again, so a title or a
+    file name that reads ``__SCRIPT__`` stays text instead of pulling the viewer's code
+    (or the data) into the page, as replacing the placeholders one after another did.
+
+    Raises:
+        KeyError: The template names a placeholder ``parts`` lacks (a bug of the page).
+    """
+    return _PLACEHOLDER.sub(lambda m: parts[m.group(1)], template)
+
+
+#: The page's placeholders: ``__TITLE__``, ``__STYLE__``, ``__SCRIPT__``, ``__DATA__``.
+_PLACEHOLDER = re.compile(r"__(TITLE|STYLE|SCRIPT|DATA)__")
 
 
 def file_size(size: int) -> str:

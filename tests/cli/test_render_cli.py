@@ -83,3 +83,59 @@ def test_render_console_script_error_end_to_end(tmp_path: Path) -> None:
         "error: navigator=astar moves robots independently (they pass through each other); "
         "render with navigator=sipp or navigator=cbs"
     )
+
+
+def _leftovers(root: Path) -> list[str]:
+    """Locks and temporary files a run left beside its output."""
+    return sorted(p.name for p in root.glob(".*") if p.suffix in (".lock", ".tmp"))
+
+
+def test_render_never_overwrites_a_file_it_reads(tmp_path: Path, cli, monkeypatch) -> None:
+    """output=P.json where P.json is the LoRR problem it plays: refused before work, the
+    problem untouched (also through a symbolic link)."""
+    from tests.cli.test_eval_cli import _tiny_lorr_problem
+
+    problem = _tiny_lorr_problem(tmp_path)
+    before = problem.read_bytes()
+    (tmp_path / "link.json").symlink_to(problem)
+    (tmp_path / "sub").mkdir()
+    monkeypatch.setattr("rtaw_marl.cli.render.build_sim", lambda *a: pytest.fail("work started"))
+    for output in ("p.json", "link.json", "sub/../p.json"):
+        result = cli("render", "scenario=lorr", "tasks.problem=p.json", "env.horizon=10",
+                     f"output={output}")  # fmt: skip
+        assert result.code == 2
+        assert f"error: output={output} is the same file as " in result.err
+        assert "problem=p.json, which this command reads" in result.err
+        assert len(result.err.strip().splitlines()) == 1
+        assert problem.read_bytes() == before
+    assert _leftovers(tmp_path) == []
+
+
+def test_render_output_in_use_is_refused(tmp_path: Path, cli, monkeypatch) -> None:
+    """Another run holds episode.gif: this one stops before playing, writes nothing."""
+    from rtaw_marl.utils.runs import claim_file
+
+    monkeypatch.setattr("rtaw_marl.cli.render.build_sim", lambda *a: pytest.fail("work started"))
+    with claim_file(tmp_path / "episode.gif"):
+        result = cli("render", "env.num_tasks=4", "output=episode.gif")
+    assert result.code == 2
+    assert "output=episode.gif is in use by another running process" in result.err
+    assert len(result.err.strip().splitlines()) == 1
+    assert not (tmp_path / "episode.gif").exists()
+    assert _leftovers(tmp_path) == []
+
+
+def test_render_removes_what_a_killed_write_left(tmp_path: Path, cli) -> None:
+    """A killed earlier write's .e.json.XXXXXXXX.tmp goes; another output's stays; no
+    lock is left after the run."""
+    killed = tmp_path / ".e.json.a1b2c3d4.tmp"
+    killed.write_text("half a file", encoding="utf-8")
+    other = tmp_path / ".f.json.a1b2c3d4.tmp"
+    other.write_text("keep", encoding="utf-8")
+    result = cli("render", "layout=A", "env.num_tasks=4", "output=e.json")
+    assert result.code == 0, result.err
+    assert not killed.exists()
+    assert other.read_text(encoding="utf-8") == "keep"
+    assert "removed what a killed earlier write of e.json left" in result.err
+    assert (tmp_path / "e.json").stat().st_size > 0
+    assert _leftovers(tmp_path) == [other.name]

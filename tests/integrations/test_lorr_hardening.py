@@ -192,29 +192,3 @@ def test_a_build_under_a_cache_path_with_a_space_runs_no_shell(
     assert (victim / "tmp" / "keep.txt").read_text() == "keep"
     assert [c[0] for c in commands] == ["cmake", "make"]
     assert (build.root / "python" / "tmp" / "pyTaskScheduler.cpp").is_file()
-
-
-@pytest.mark.unit
-@pytest.mark.parametrize(
-    ("paths", "message"),
-    [
-        (["X,W", "W,W"], "robot 0: unknown MAPF action 'X' at timestep 0"),
-        (["R,W", "W,W"], "robot 0 is on a blocked or outside cell (0, 1) at timestep 1"),
-    ],
-)
-def test_replay_messages_show_no_numpy_internals(paths: list[str], message: str) -> None:
-    """An action or a cell in a LoRR output file is named as written: 'X' and (0, 1),
-    not np.str_('X') and (np.int64(0), np.int64(1))."""
-    import numpy as np
-
-    from rtaw_marl.errors import ConfigError
-    from rtaw_marl.integrations.lorr.output import replay
-    from rtaw_marl.sim.layout import Layout
-
-    layout = Layout(np.array([[False, True, False], [False, False, False]]))  # .@. / ...
-    data = {"actionModel": "MAPF", "start": [[0, 0, "E"], [1, 2, "E"]],
-            "actualPaths": paths, "events": [], "tasks": []}  # fmt: skip
-    with pytest.raises(ConfigError) as info:
-        replay(data, layout)
-    assert message in str(info.value)
-    assert "np." not in str(info.value)

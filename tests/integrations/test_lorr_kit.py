@@ -232,23 +232,26 @@ def test_the_makefile_asks_the_kit_what_to_install(capsys: pytest.CaptureFixture
 
 def test_replay_catches_bad_outputs() -> None:
     """The checker refuses what LoRR would: a blocked cell, a shared cell, a swap, an
-    event away from its errand."""
+    event away from its errand (the one reader of the format, as rtaw-view reads it)."""
     from rtaw_marl.sim.layout import Layout
 
     layout = Layout(np.array([[0, 0, 0], [0, 1, 0]], dtype=bool))
     base = {"actionModel": "MAPF", "start": [[0, 0, "N/A"], [0, 2, "N/A"]], "events": [],
-            "tasks": [[0, 0, [0, 1, 0, 2]]]}  # fmt: skip
+            "tasks": [[0, 0, [0, 1, 0, 2]]], "actualSchedule": ["", ""], "teamSize": 2,
+            "numTaskFinished": 0}  # fmt: skip
     assert replay({**base, "actualPaths": ["R,W", "W,W"]}, layout).tasks_finished == 0
-    with pytest.raises(ConfigError, match="blocked"):
+    with pytest.raises(ConfigError, match="an obstacle, at timestep 2"):
         replay({**base, "actualPaths": ["R,U", "W,W"]}, layout)  # U: row + 1, onto (1, 1)
     with pytest.raises(ConfigError, match="share a cell"):
         replay({**base, "actualPaths": ["R,W", "L,W"]}, layout)
     with pytest.raises(ConfigError, match="swap"):
         replay({**base, "start": [[0, 0, "N/A"], [0, 1, "N/A"]], "actualPaths": ["R", "L"]}, layout)
-    with pytest.raises(ConfigError, match="not at errand"):
-        replay({**base, "actualPaths": ["W", "W"], "events": [[1, 0, 0, 1]]}, layout)
+    with pytest.raises(ConfigError, match="not at errand 1 of task 0"):
+        replay({**base, "actualPaths": ["W", "W"], "events": [[1, 0, 0, 1]],
+                "actualSchedule": ["0:0", ""]}, layout)  # fmt: skip
     finished = replay(
         {**base, "start": [[0, 0, "E"], [1, 2, "N"]], "actionModel": "MAPF_T",
-         "actualPaths": ["F,F", "W,W"], "events": [[1, 0, 0, 1], [2, 0, 0, 2]]}, layout,
+         "actualPaths": ["F,F", "W,W"], "events": [[1, 0, 0, 1], [2, 0, 0, 2]],
+         "actualSchedule": ["0:0", ""], "numTaskFinished": 1}, layout,
     )  # fmt: skip
     assert finished.tasks_finished == 1

@@ -23,7 +23,7 @@ from rtaw_marl.viz.episode_data import (
     move_codes,
     open_tasks,
 )
-from rtaw_marl.viz.view import ViewEpisode, page, write_view
+from rtaw_marl.viz.view import ViewEpisode, fill, page, write_view
 
 pytestmark = pytest.mark.unit
 
@@ -118,6 +118,26 @@ def test_page_is_self_contained_and_holds_the_episode(layout: Layout, schedule: 
     assert np.array_equal(_array(ep["moves"]), move_codes(schedule.positions).T)
     assert np.array_equal(_array(ep["start"]), schedule.positions[0])
     assert _array(data["cells"]).reshape(4, 6)[3, 5] == 1
+
+
+def test_placeholders_in_user_text_stay_text(layout: Layout, schedule: Schedule) -> None:
+    """A title or an episode name that reads like the page's placeholders is not filled
+    in: the template is filled in one pass, and user text is never searched again."""
+    title = "__SCRIPT__ __STYLE__ __DATA__ __TITLE__"
+    text = page(layout, [ViewEpisode("__DATA__", schedule)], title)
+    assert f"<title>{title}</title>" in text
+    assert text.count("window.rtawView =") == 1
+    assert text.count("<style>") == 1
+    data = _data(text)
+    assert data["title"] == title
+    assert data["episodes"][0]["name"] == "__DATA__"
+    rest = text.replace(title, "").replace('"name":"__DATA__"', "")
+    assert not re.search(r"__(TITLE|STYLE|SCRIPT|DATA)__", rest)  # every placeholder filled
+
+
+def test_fill_is_one_pass() -> None:
+    parts = {"TITLE": "__DATA__", "STYLE": "s", "SCRIPT": "__TITLE__", "DATA": "d"}
+    assert fill("__TITLE__|__STYLE__|__SCRIPT__|__DATA__", parts) == "__DATA__|s|__TITLE__|d"
 
 
 def test_page_refuses_three_episodes_and_mixed_fleets(layout: Layout, schedule: Schedule) -> None:

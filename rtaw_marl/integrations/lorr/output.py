@@ -10,11 +10,13 @@ in the schedule's order; an event is ``[timestep, robot, task, errands reached]`
 
 :func:`replay` reads such a file, ``lifelong``'s own (``MAPF_T``: ``F`` forward, ``R``
 clockwise, ``C`` counter-clockwise, ``W``/``T`` wait; headings ``E, S, W, N`` move
-``+col, +row, -col, -row``) or ours, and checks it on its own code path: every cell
-free, no two robots in a cell or swapping, every event at its errand's cell and in
-order, and counts the tasks finished. The start kit's evaluation mode (``lifelong -m``)
-is declared by v2.1.2 but not implemented, so this is the round trip: LoRR's outputs
-replay to their own ``numTaskFinished``; ours to the episode they came from.
+``+col, +row, -col, -row``) or ours, through the one reader of the format
+(:mod:`rtaw_marl.viz.schedule_file`, which rtaw-view uses too): every field checked,
+every cell free, no two robots in a cell or swapping, every event at its errand's cell
+and in order, and the tasks finished counted. The start kit's evaluation mode
+(``lifelong -m``) is declared by v2.1.2 but not implemented, so this is the round trip:
+LoRR's outputs replay to their own ``numTaskFinished``; ours to the episode they came
+from.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
+from rtaw_marl.viz.schedule_file import SavedEpisode, read_schedule_data, read_schedule_file
 
 __all__ = [
     "Replay",
@@ -42,9 +45,6 @@ __all__ = [
 
 #: PlanViz's ``MAPF`` letters: (row, column) change.
 _MAPF_MOVES = {"U": (1, 0), "D": (-1, 0), "R": (0, 1), "L": (0, -1), "W": (0, 0), "T": (0, 0)}
-#: LoRR's headings 0..3 = E, S, W, N: (row, column) change of a forward move.
-_HEADINGS = np.array([[0, 1], [1, 0], [0, -1], [-1, 0]], dtype=np.int64)
-_START_HEADING = {"E": 0, "S": 1, "W": 2, "N": 3}
 
 
 def episode_output(schedule: Schedule, horizon: int | None = None) -> dict[str, Any]:
@@ -112,171 +112,44 @@ class Replay:
     Attributes:
         positions: ``int64 [T + 1, M, 2]`` each robot's ``(row, col)`` at each timestep.
         tasks_finished: Tasks whose last errand was reached (from the events, checked).
-        events_checked: Events found at their errand's cell, in order.
+        tasks_assigned: Tasks assigned in ``actualSchedule`` (checked against events).
     """
 
     positions: np.ndarray
     tasks_finished: int
-    events_checked: int
+    tasks_assigned: int
 
 
 def read_replay(path: str | Path, layout: Layout) -> Replay:
-    """:func:`replay` of a file."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{path}: not a LoRR output file ({exc})") from None
-    return replay(data, layout)
+    """:func:`replay` of a file (:func:`~rtaw_marl.viz.schedule_file.read_schedule_file`)."""
+    return _replay(read_schedule_file(path, layout))
 
 
 def read_schedule(path: str | Path, layout: Layout) -> Schedule:
     """A LoRR output file (``lifelong``'s or ``rtaw-render``'s) as a checked :class:`Schedule`.
 
-    The file is replayed and checked first (:func:`replay`). Each task's robot and
-    assignment time come from ``actualSchedule`` (the entry of the robot its events name,
-    else the last), its pickup and delivery from its first and last errand's events; a
-    task not yet picked up or delivered at the end has that time set to ``T + 1``.
-    Tasks keep their ids' order. Tasks that were never assigned are left out.
+    The file is checked in full and replayed by the one reader of the format,
+    :func:`~rtaw_marl.viz.schedule_file.read_schedule_file` (what rtaw-view shows). Each
+    task's robot and assignment time come from ``actualSchedule``, its pickup and
+    delivery from its first and last errand's events; a task not yet picked up or
+    delivered at the end has that time set to ``T + 1``. Tasks keep their ids' order.
+    Tasks that were never assigned are left out.
     """
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{path}: not a LoRR output file ({exc})") from None
-    played = replay(data, layout)
-    end = played.positions.shape[0]  # T + 1: "not within the episode"
-    errands = {int(t[0]): np.asarray(t[2], dtype=np.int64).reshape(-1, 2) for t in data["tasks"]}
-    release = {int(t[0]): int(t[1]) for t in data["tasks"]}
-    reached: dict[int, dict[int, int]] = {}
-    by_events: dict[int, int] = {}
-    for t, robot, task, seq in (tuple(int(v) for v in e[:4]) for e in data["events"]):
-        reached.setdefault(task, {})[seq] = t
-        by_events.setdefault(task, robot)
-    assigned: dict[int, tuple[int, int]] = {}
-    for robot, text in enumerate(data.get("actualSchedule", [])):
-        for entry in filter(None, str(text).split(",")):
-            when, _, task = entry.partition(":")
-            tid = int(task)
-            if tid in errands and by_events.get(tid, robot) == robot:
-                assigned[tid] = (robot, int(when))
-    ids = sorted(assigned)
-    rows = np.array(
-        [[*errands[k][0, ::-1], *errands[k][-1, ::-1]] for k in ids], dtype=np.int64
-    ).reshape(-1, 4)
-    return Schedule(
-        positions=played.positions[..., ::-1].copy(),
-        tasks=rows,
-        task_robot=np.array([assigned[k][0] for k in ids], dtype=np.int64),
-        task_arrival=np.array([release[k] for k in ids], dtype=np.int64),
-        task_assigned=np.array([assigned[k][1] for k in ids], dtype=np.int64),
-        task_pickup=np.array([reached.get(k, {}).get(1, end) for k in ids], dtype=np.int64),
-        task_delivered=np.array(
-            [reached.get(k, {}).get(len(errands[k]), end) for k in ids], dtype=np.int64
-        ),
-    )
+    return read_schedule_file(path, layout).schedule
 
 
 def replay(data: dict[str, Any], layout: Layout) -> Replay:
-    """Replay and check a LoRR output object on ``layout``.
+    """Check and replay a LoRR output object on ``layout`` (the one reader of the
+    format, :func:`~rtaw_marl.viz.schedule_file.read_schedule_data`).
 
     Raises:
-        ConfigError: A key is missing, an action unknown, a robot leaves the free cells,
-            two robots share a cell or swap, or an event is not at its errand (the
-            message says which robot, task and timestep).
+        ConfigError: A key is missing or malformed, an action unknown, a robot leaves
+            the free cells, two robots share a cell or swap, or an event is not at its
+            errand (the message says which robot, task and timestep).
     """
-    try:
-        model = data["actionModel"]
-        starts = data["start"]
-        actions = [str(p).split(",") if p else [] for p in data["actualPaths"]]
-        events, tasks = data["events"], data["tasks"]
-    except (KeyError, TypeError) as exc:
-        raise ConfigError(f"not a LoRR output object: missing {exc}") from None
-    if len({len(a) for a in actions}) > 1:
-        raise ConfigError("actualPaths have different lengths")
-    codes = np.array(actions, dtype="<U1").reshape(len(actions), -1).T  # [T, M]
-    rc0 = np.array([[int(s[0]), int(s[1])] for s in starts], dtype=np.int64)
-    if model == "MAPF":
-        delta = _mapf_deltas(codes)
-    elif model == "MAPF_T":
-        heading0 = np.array([_START_HEADING.get(str(s[2]), 0) for s in starts], dtype=np.int64)
-        delta = _turning_deltas(codes, heading0)
-    else:
-        raise ConfigError(f"unknown actionModel {model!r}; valid: MAPF, MAPF_T")
-    positions = np.concatenate([rc0[None], rc0[None] + np.cumsum(delta, axis=0)])
-    _check_cells(positions, layout)
-    _check_conflicts(positions)
-    finished, checked = _check_events(positions, events, tasks)
-    return Replay(positions, finished, checked)
+    return _replay(read_schedule_data(data, layout, "(LoRR output)"))
 
 
-def _mapf_deltas(codes: np.ndarray) -> np.ndarray:
-    delta = np.zeros((*codes.shape, 2), dtype=np.int64)
-    known = np.isin(codes, list(_MAPF_MOVES))
-    if not known.all():
-        t, r = np.argwhere(~known)[0]
-        raise ConfigError(f"robot {r}: unknown MAPF action {str(codes[t, r])!r} at timestep {t}")
-    for letter, move in _MAPF_MOVES.items():
-        delta[codes == letter] = move
-    return delta
-
-
-def _turning_deltas(codes: np.ndarray, heading0: np.ndarray) -> np.ndarray:
-    known = np.isin(codes, ["F", "R", "C", "W", "T"])
-    if not known.all():
-        t, r = np.argwhere(~known)[0]
-        raise ConfigError(f"robot {r}: unknown MAPF_T action {str(codes[t, r])!r} at timestep {t}")
-    turn = (codes == "R").astype(np.int64) - (codes == "C")
-    # The heading during timestep t: the start's, turned by every action before t.
-    before = np.concatenate([np.zeros((1, codes.shape[1]), np.int64), np.cumsum(turn, 0)[:-1]])
-    heading = (heading0[None] + before) % 4
-    return _HEADINGS[heading] * (codes == "F")[..., None]
-
-
-def _check_cells(positions: np.ndarray, layout: Layout) -> None:
-    rows, cols = positions[..., 0], positions[..., 1]
-    inside = (rows >= 0) & (rows < layout.height) & (cols >= 0) & (cols < layout.width)
-    free = np.zeros_like(inside)
-    free[inside] = ~layout.obstacles[rows[inside], cols[inside]]
-    if not free.all():
-        t, r = np.argwhere(~free)[0]
-        raise ConfigError(
-            f"robot {r} is on a blocked or outside cell {tuple(positions[t, r].tolist())} at "
-            f"timestep {t}"
-        )
-
-
-def _check_conflicts(positions: np.ndarray) -> None:
-    cell = positions[..., 0] * (positions[..., 1].max() + 2) + positions[..., 1]
-    order = np.sort(cell, axis=1)
-    same = order[:, 1:] == order[:, :-1]
-    if same.any():
-        t = int(np.argwhere(same)[0][0])
-        robots = np.flatnonzero(np.isin(cell[t], order[t, 1:][same[t]]))
-        raise ConfigError(f"robots {robots[0]} and {robots[1]} share a cell at timestep {t}")
-    # A swap: robots a and b trade cells between t and t + 1 (edge a->b and b->a).
-    t, robot = np.nonzero(cell[:-1] != cell[1:])
-    size = int(cell.max()) + 1
-    src, dst = cell[t, robot], cell[t + 1, robot]
-    edge = (t * size + src) * size + dst
-    back = np.isin((t * size + dst) * size + src, edge)
-    if back.any():
-        i = int(np.flatnonzero(back)[0])
-        other = np.flatnonzero((t == t[i]) & (src == dst[i]) & (dst == src[i]))[0]
-        raise ConfigError(f"robots {robot[i]} and {robot[other]} swap cells at timestep {t[i] + 1}")
-
-
-def _check_events(positions: np.ndarray, events: list[Any], tasks: list[Any]) -> tuple[int, int]:
-    errands = {int(t[0]): np.asarray(t[2], dtype=np.int64).reshape(-1, 2) for t in tasks}
-    reached: dict[int, int] = {}
-    finished = 0
-    for t, robot, task, seq in (tuple(int(v) for v in e[:4]) for e in events):
-        if task not in errands or not 1 <= seq <= len(errands[task]):
-            raise ConfigError(f"event at timestep {t}: task {task} has no errand {seq}")
-        if reached.get(task, 0) != seq - 1:
-            raise ConfigError(f"event at timestep {t}: task {task} errand {seq} out of order")
-        if t >= len(positions) or not np.array_equal(positions[t, robot], errands[task][seq - 1]):
-            raise ConfigError(
-                f"event at timestep {t}: robot {robot} is not at errand {seq} of task {task}"
-            )
-        reached[task] = seq
-        finished += seq == len(errands[task])
-    return finished, len(events)
+def _replay(saved: SavedEpisode) -> Replay:
+    positions = saved.schedule.positions[..., ::-1].copy()  # (x, y) -> (row, col)
+    return Replay(positions, saved.tasks_finished, len(saved.schedule.tasks))
