@@ -3,7 +3,6 @@ the key, before any work; the start kit's reveal window; the cases LoRR allows."
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -15,24 +14,16 @@ from rtaw_marl.policies import make_baseline
 from rtaw_marl.scenarios import lorr_scenario
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.lorr import read_problem, reveal_window
+from tests.sim.test_lorr import write_problem
 
 pytestmark = pytest.mark.unit
-
-MAP = "type octile\nheight 2\nwidth 4\nmap\n....\n..@.\n"  # location = row * 4 + col
 
 
 def problem(root: Path, tasks: str = "2\n1,7\n4,0\n", agents: str = "2\n0\n7\n",
             **keys: object) -> Path:  # fmt: skip
-    """A 4x2 problem (map '....' / '..@.') in ``root``."""
+    """test_lorr's 4x2 problem (map '....' / '..@.', location = row * 4 + col) in ``root``."""
     root.mkdir(parents=True, exist_ok=True)
-    (root / "m.map").write_text(MAP)
-    (root / "a.agents").write_text(agents)
-    (root / "t.tasks").write_text(tasks)
-    data = {"mapFile": "m.map", "agentFile": "a.agents", "taskFile": "t.tasks",
-            "teamSize": 2, "numTasksReveal": 1.5, **keys}  # fmt: skip
-    path = root / "p.json"
-    path.write_text(json.dumps(data))
-    return path
+    return write_problem(root, tasks, agents, **keys)
 
 
 @pytest.mark.parametrize(
