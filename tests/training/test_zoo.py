@@ -82,7 +82,7 @@ def test_a_shipped_checkpoints_old_eval_section_reads_as_selection() -> None:
     recipe_cfg = as_plain(to_typed(compose("train", ZOO["A_astar_m10"].overrides())))
     # (It predates selection.keep.)
     assert stored["selection"] == {k: recipe_cfg["selection"][k] for k in ("every_frames", "seeds")}
-    # Its selection seeds compare under today's name (its env predates newer env keys).
+    # Its selection seeds compare under today's name (its sim section predates newer keys).
     changes = scenario_changes(ckpt["config"], recipe_cfg)
     assert not [c for c in changes if c.startswith(("selection", "eval"))], changes
     command = upgrade_command(ckpt["command"])
