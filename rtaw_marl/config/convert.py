@@ -95,7 +95,7 @@ def check_overrides(cfg: DictConfig, overrides: Sequence[str]) -> None:
 
 
 def check_renamed(config_name: str, overrides: Sequence[str]) -> None:
-    """Refuse a key that was renamed, naming its new name: ``sim.num_robots=50`` is
+    """Refuse a key that was renamed, naming its new name: ``env.num_robots=50`` is
     ``sim.num_robots`` now in every command with the simulator's keys
     (:data:`rtaw_marl.utils.renamed.RENAMED`), ``rtaw-train eval.every_frames=1024``
     ``selection.every_frames`` (:data:`rtaw_marl.training.config.RENAMED`). Checked
