@@ -34,7 +34,7 @@ demo: $(STAMP)
 	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
 		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
-	$(BIN)/rtaw-view navigator=sipp env.num_tasks=100 policy=[lookahead,pretrained] \
+	$(BIN)/rtaw-view navigator=sipp sim.num_tasks=100 policy=[lookahead,pretrained] \
 		pretrained=generalist_plus output=$(DEMO_RUN)/view.html
 
 # LoRR's start kit (../shared), built once per machine into ~/.cache/rtaw_marl/lorr: a

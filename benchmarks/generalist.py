@@ -50,7 +50,7 @@ def _table1_cells(seeds: Sequence[int]) -> list[Cell]:
     return [
         _alone(s, f"{mode}|{s.title}", seeds)
         for mode in ("paper", "drain")
-        for s in (SCENARIOS[n].with_env(episode_mode=mode) for n in TABLE1)
+        for s in (SCENARIOS[n].with_sim(episode_mode=mode) for n in TABLE1)
     ]
 
 
@@ -131,36 +131,36 @@ def _unseen() -> dict[str, tuple[Scenario, str]]:
     out: dict[str, tuple[Scenario, str]] = {}
     for m in (3, 30, 150, 300):
         out[f"layout C, M={m}"] = (
-            c.with_env(num_robots=m),
+            c.with_sim(num_robots=m),
             "C_astar_m10_long_plus" if m < 50 else "C_astar_m100_long_plus",
         )
     out["layout C, queue of 20, M=30"] = (
-        c.with_env(num_robots=30, queue_len=20),
+        c.with_sim(num_robots=30, queue_len=20),
         "C_astar_m10_long_plus",
     )
-    out["256x256 C, M=2000"] = (big.with_env(num_robots=2000), "C256_astar_m500_random_plus")
+    out["256x256 C, M=2000"] = (big.with_sim(num_robots=2000), "C256_astar_m500_random_plus")
     for m in (10, 100):
         s = _custom(f"movingai_m{m}", movingai, {"num_robots": m, "num_tasks": 500})
         out[f"MovingAI warehouse-10-20-10-2-1, M={m}"] = (s, "C_astar_m100_long_plus")
     # The setting that selected the generalist's checkpoint (a mix member), on the
     # evaluation seeds: its selection-seed gain against its held-out gain.
     out["selection setting: layout A, M=200, paper (trained on)"] = (
-        SCENARIOS["A_astar_m100"].with_env(num_robots=200, episode_mode="paper"),
+        SCENARIOS["A_astar_m100"].with_sim(num_robots=200, episode_mode="paper"),
         "A_astar_m100_long_plus",
     )
     for m, tasks in ((1000, 2000), (10_000, 1000)):
-        env = {"num_robots": m, "num_tasks": tasks, "episode_mode": "paper"}
+        sim = {"num_robots": m, "num_tasks": tasks, "episode_mode": "paper"}
         out[f"LoRR warehouse_large, M={m}"] = (
-            _custom(f"lorr_m{m}", lorr, env),
+            _custom(f"lorr_m{m}", lorr, sim),
             "C256_astar_m500_random_plus",
         )
     return out
 
 
-def _custom(name: str, layout: dict, env: dict) -> Scenario:
+def _custom(name: str, layout: dict, sim: dict) -> Scenario:
     return Scenario(
         name=name, title=name, description=name, layout=layout, navigator="astar",
-        tasks="random", env=env,
+        tasks="random", sim=sim,
     )  # fmt: skip
 
 

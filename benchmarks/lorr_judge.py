@@ -3,7 +3,7 @@
 Rows are schedulers; the official columns come from ``rtaw-lorr`` results (one
 ``lifelong`` run each: LoRR's problem is fixed, its simulator deterministic up to the
 planner's timing), the own columns from ``rtaw-eval`` results of the same problem and
-horizon (``scenario=lorr env.horizon=T``, several seeds: the mean and its 95% interval).
+horizon (``scenario=lorr sim.horizon=T``, several seeds: the mean and its 95% interval).
 """
 
 from __future__ import annotations

@@ -60,7 +60,7 @@ def _table1_cells(mode: str) -> Callable[[Sequence[int]], list[Cell]]:
     def cells(seeds: Sequence[int]) -> list[Cell]:
         out = []
         for name in TABLE1:
-            s = SCENARIOS[name].with_env(episode_mode=mode)
+            s = SCENARIOS[name].with_sim(episode_mode=mode)
             out.append(Cell(key=s.title, scenario=s, policies=_policies(s), seeds=tuple(seeds)))
         return out
 
@@ -167,7 +167,7 @@ def _navigator_cells(seeds: Sequence[int]) -> list[Cell]:
     for nav in NAVIGATORS:
         for p in PRESETS:
             base = SCENARIOS[f"{p}_astar_m10"]
-            s = dataclasses.replace(base, navigator=nav).with_env(
+            s = dataclasses.replace(base, navigator=nav).with_sim(
                 num_tasks=50, noise_mean=0.0, noise_var=0.0
             )
             shipped = {"RTAW": base.name, "RTAW+": f"{base.name}_plus"}
@@ -204,7 +204,7 @@ def _budget_cells(seeds: Sequence[int]) -> list[Cell]:
     cells = []
     for mode in ("paper", "drain"):
         for name in TABLE1:
-            s = SCENARIOS[name].with_env(episode_mode=mode)
+            s = SCENARIOS[name].with_sim(episode_mode=mode)
             policies = {"RTAW": learned(name), "RTAW+": learned(f"{name}_plus")}
             cells.append(
                 Cell(key=f"{mode}|{s.title}", scenario=s, policies=policies, seeds=tuple(seeds))
@@ -251,7 +251,7 @@ REFERENCE_HORIZON = 3  # BaselinesConfig's default: the tables' lookahead
 def _horizon_cells(seeds: Sequence[int]) -> list[Cell]:
     cells = []
     for name in TABLE1:
-        s = SCENARIOS[name].with_env(episode_mode="paper")
+        s = SCENARIOS[name].with_sim(episode_mode="paper")
         policies = {"MPDM": RULES["MPDM"]}
         policies.update({f"H={h}": rule("lookahead", lookahead_horizon=h) for h in HORIZONS})
         cells.append(Cell(key=s.title, scenario=s, policies=policies, seeds=tuple(seeds)))

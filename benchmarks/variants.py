@@ -121,7 +121,7 @@ def sipp_setting(layout: str) -> Scenario:
     """The navigation table's SIPP setting on preset ``layout``: 10 robots, 50
     designated tasks, no completion noise (the ``navigators`` study's)."""
     base = SCENARIOS[f"{layout}_astar_m10"]
-    return dataclasses.replace(base, navigator="sipp").with_env(
+    return dataclasses.replace(base, navigator="sipp").with_sim(
         num_tasks=50, noise_mean=0.0, noise_var=0.0
     )
 
@@ -145,19 +145,19 @@ def sipp_finetune_command(
     )  # fmt: skip
 
 
-#: The rewards of the paper's reward ablation (``env.reward``).
+#: The rewards of the paper's reward ablation (``sim.reward``).
 REWARDS = ("ttd", "length", "ttd_length")
 
 
 def reward_command(reward: str, run_dir: Path) -> list[str]:
     """The reward ablation's run: RTAW on layout A with A*, 10 robots, designated tasks,
-    ``algo=ppo_fast``, 102,400 frames, seed 0, trained with ``env.reward=<reward>``."""
+    ``algo=ppo_fast``, 102,400 frames, seed 0, trained with ``sim.reward=<reward>``."""
     if reward not in REWARDS:
         raise unknown_name("reward", reward, list(REWARDS))
     setting = [o for o in SCENARIOS["A_astar_m10"].overrides() if o != "tasks=designated"]
     return _command(
         [*setting, "algo=ppo_fast", "frames=102400", "selection.every_frames=10240", "seed=0",
-         f"env.reward={reward}"],
+         f"sim.reward={reward}"],
         run_dir,
     )  # fmt: skip
 

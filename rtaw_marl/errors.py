@@ -61,7 +61,7 @@ def did_you_mean(name: str, choices: Iterable[str], prefix: str = "") -> str:
     Args:
         name: What the user typed.
         choices: The valid names.
-        prefix: Written before each suggestion (``"env."``, ``"navigator="``), so the
+        prefix: Written before each suggestion (``"sim."``, ``"navigator="``), so the
             suggestion is what to type.
     """
     close = [repr(f"{prefix}{c}") for c in close_names(name, choices)]

@@ -211,7 +211,7 @@ def test_env_only_install_in_a_fresh_venv(tmp_path: Path) -> None:
         "    return int(np.flatnonzero(sim.queue_mask)[0])\n"
     )
     proc = run(bindir / "rtaw-eval", "layout=file", "layout.path=builtin:usc_64.cfg",
-               "env.num_tasks=20", "policy=[mpdm,my_rules:first]", "seeds=[0]",
+               "sim.num_tasks=20", "policy=[mpdm,my_rules:first]", "seeds=[0]",
                "progress=false", "output=r.json")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert "| first |" in proc.stdout

@@ -67,7 +67,7 @@ def row_cell(
 ) -> Cell:
     """One row's cell: MPDM, the learned policies (``RTAW``/``RTAW+``: the row's own;
     else a registry entry), the checkpoint files, then lookahead."""
-    s = SCENARIOS[ROWS[row]].with_env(episode_mode="drain")
+    s = SCENARIOS[ROWS[row]].with_sim(episode_mode="drain")
     refs = {BASELINE: rule("mpdm")}
     for name in names:
         refs[name] = learned(s.policies[name] if name in LEARNED else name)

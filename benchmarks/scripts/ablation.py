@@ -6,7 +6,7 @@ Usage::
     python -m benchmarks.scripts.seed_spread C_astar_m10_plus --train-seeds 1 2   # the reference
     python -m benchmarks.scripts.ablation C_astar_m10_plus model.critic_fleet=false --train-seeds 0 1
     # A curriculum: the first 204,800 PPO frames (and the warm start) with a queue of 5.
-    python -m benchmarks.scripts.ablation C_astar_m10_plus --first env.queue_len=5 --first-frames 204800
+    python -m benchmarks.scripts.ablation C_astar_m10_plus --first sim.queue_len=5 --first-frames 204800
 
 Trains the entry's recipe plus the overrides with ``seed=K`` for each training seed
 (:func:`benchmarks.variants.ablation_commands`, into

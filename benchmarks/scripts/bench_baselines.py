@@ -26,8 +26,8 @@ from rtaw_marl.sim.core import WarehouseSim
 def _sim(m: int, n: int, decisions: int) -> WarehouseSim:
     size = 256 if m >= 1000 else 60
     layout = {"name": "preset", "preset": "C", "width": size, "height": size}
-    env = {"num_robots": m, "num_tasks": decisions, "queue_len": n, "episode_mode": "paper"}
-    return build_sim(SimSpec.of(env, layout, "astar", "random"))
+    sim_keys = {"num_robots": m, "num_tasks": decisions, "queue_len": n, "episode_mode": "paper"}
+    return build_sim(SimSpec.of(sim_keys, layout, "astar", "random"))
 
 
 def per_decision_ms(sim: WarehouseSim, rules: dict[str, object], seed: int) -> dict[str, float]:

@@ -39,8 +39,8 @@ def _ms(fn, repeat: int = 3) -> float:
 
 def measure(m: int, n: int, k: int, decisions: int) -> dict[str, float]:
     """Median ms per decision: the policy on all ``n`` tasks, on ``k``, and MPDM."""
-    env = {"num_robots": m, "num_tasks": decisions, "queue_len": n, "episode_mode": "paper"}
-    sim = build_sim(SimSpec.of(env, C256, "astar", "random"))
+    sim_keys = {"num_robots": m, "num_tasks": decisions, "queue_len": n, "episode_mode": "paper"}
+    sim = build_sim(SimSpec.of(sim_keys, C256, "astar", "random"))
     full = load_policy("generalist_plus")
     top = load_policy("generalist_plus", candidates=k)
     mpdm = MPDM()

@@ -183,7 +183,7 @@ def repeat(run: Callable[[int], tuple[int, float]], repeats: int, per_second: bo
 def bench_full_episode(sizes: Sizes, policy_cls: type[BaselinePolicy]) -> tuple[Row, float]:
     """Whole episodes including distance model construction; also the warm-up's wall time."""
     grid = {"name": "open", "width": sizes.episode_grid, "height": sizes.episode_grid}
-    env = {
+    sim_keys = {
         "num_robots": sizes.episode_robots,
         "num_tasks": sizes.episode_tasks,
         "queue_len": QUEUE_LEN,
@@ -191,7 +191,7 @@ def bench_full_episode(sizes: Sizes, policy_cls: type[BaselinePolicy]) -> tuple[
 
     def run(seed: int) -> tuple[int, float]:
         start = time.perf_counter()
-        sim = build_sim(SimSpec.of(env, grid, "astar", "random"))
+        sim = build_sim(SimSpec.of(sim_keys, grid, "astar", "random"))
         policy = policy_cls()
         decisions, _ = sim_episode(sim, policy, seed)
         return decisions, time.perf_counter() - start
@@ -217,14 +217,14 @@ def bench_throughput(sizes: Sizes, settings: Sequence[Setting]) -> list[Row]:
     rows: list[Row] = []
     for setting in settings:
         for m in sizes.robots:
-            env_cfg = {"num_robots": m, "num_tasks": sizes.num_tasks, "queue_len": QUEUE_LEN}
-            sim = build_sim(SimSpec.of(env_cfg, setting.layout, setting.navigator, "designated"))
+            sim_keys = {"num_robots": m, "num_tasks": sizes.num_tasks, "queue_len": QUEUE_LEN}
+            sim = build_sim(SimSpec.of(sim_keys, setting.layout, setting.navigator, "designated"))
             mpdm = MPDM()
             samples = repeat(lambda s, sim=sim, p=mpdm: sim_episode(sim, p, s), sizes.repeats, True)
             rows.append(Row("sim+MPDM", setting.label, m, sizes.num_tasks, samples, "decisions/s"))
             _progress(rows[-1])
 
-            env = warehouse_v1.env(**env_cfg, layout=setting.layout, navigator=setting.navigator)
+            env = warehouse_v1.env(**sim_keys, layout=setting.layout, navigator=setting.navigator)
             samples = repeat(
                 lambda s, env=env: aec_episode(env, first_valid, s), sizes.repeats, True
             )

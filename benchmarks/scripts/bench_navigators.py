@@ -63,11 +63,11 @@ def ten_robots(layouts: str, seeds: list[int]) -> str:
         "| CBS fallbacks | mean TTD |",
         "|---|---|---|---|---|---|---|",
     ]
-    env = {"num_robots": 10, "num_tasks": 50, "queue_len": 10, **NOISELESS}
+    keys = {"num_robots": 10, "num_tasks": 50, "queue_len": 10, **NOISELESS}
     for nav in ("astar", "sipp", "cbs"):
         runs = []
         for i, p in enumerate(layouts):
-            sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": p}, nav, "designated"))
+            sim = build_sim(SimSpec.of(keys, {"name": "preset", "preset": p}, nav, "designated"))
             if i == 0:
                 episode(sim, 999)  # warm-up
             runs += [episode(sim, s) for s in seeds]
@@ -93,8 +93,8 @@ def scaling(robots: list[int], seeds: list[int], navigators: dict[str, int]) -> 
         for i, m in enumerate(robots):
             if m > max_m:
                 continue
-            env = {"num_robots": m, "num_tasks": 5 * m, "queue_len": 10, **NOISELESS}
-            sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated"))
+            keys = {"num_robots": m, "num_tasks": 5 * m, "queue_len": 10, **NOISELESS}
+            sim = build_sim(SimSpec.of(keys, {"name": "preset", "preset": "C"}, nav, "designated"))
             if i == 0:
                 episode(sim, 999)
             runs = [episode(sim, s) for s in seeds]

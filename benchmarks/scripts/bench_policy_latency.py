@@ -39,8 +39,8 @@ C256 = {"name": "preset", "preset": "C", "width": 256, "height": 256}
 
 
 def _sim(m: int, decisions: int, layout: dict) -> WarehouseSim:
-    env = {"num_robots": m, "num_tasks": decisions, "queue_len": 10, "episode_mode": "paper"}
-    return build_sim(SimSpec.of(env, layout, "astar", "random"))
+    sim_keys = {"num_robots": m, "num_tasks": decisions, "queue_len": 10, "episode_mode": "paper"}
+    return build_sim(SimSpec.of(sim_keys, layout, "astar", "random"))
 
 
 def _ms(fn, repeat: int = 3) -> float:

@@ -142,7 +142,7 @@ def bench_end_to_end(
     """One ``train()`` run; frames/s overall and in steady state, seconds per batch by phase."""
     from rtaw_marl.training.ppo import train
 
-    overrides = [f"env.num_robots={m}", f"collector.workers={workers}", f"frames={frames}",
+    overrides = [f"sim.num_robots={m}", f"collector.workers={workers}", f"frames={frames}",
                  f"selection.every_frames={frames // 2}", "progress=false",
                  f"collector.backend={backend}"]  # fmt: skip
     if model == "rtaw_plus":

@@ -185,9 +185,9 @@ def train(frames: int, out: Path) -> None:
     (out / "train.json").write_text(json.dumps({"frames": exp.total_frames, "wall_s": wall}))
 
 
-def rtaw_eval_policies(env_keys: dict, cfg: dict) -> dict[str, dict[str, list[float]]]:
+def rtaw_eval_policies(sim_keys: dict, cfg: dict) -> dict[str, dict[str, list[float]]]:
     """MPDM, lookahead and RTAW+ on the bare simulator, as ``rtaw-eval`` runs them."""
-    sim = build_sim(SimSpec.of(env_keys, cfg["layout"], cfg["navigator"], cfg["tasks"]))
+    sim = build_sim(SimSpec.of(sim_keys, cfg["layout"], cfg["navigator"], cfg["tasks"]))
     policies = {
         "mpdm": make_baseline("mpdm"),
         "lookahead": make_baseline("lookahead"),
@@ -217,8 +217,8 @@ def evaluate_run(out: Path, checkpoint: str) -> dict:
     for s in EVAL_SEEDS:
         mpdm_rule.reset(s)
         mpdm_path.append(play(env, RulePolicy(env, mpdm_rule), s)["ttd"])
-    env_keys = {k: cfg[k] for k in ("num_robots", "num_tasks", "queue_len", "episode_mode")}
-    sim_results = rtaw_eval_policies({**env_keys, **cfg["sim"]}, cfg)
+    sim_keys = {k: cfg[k] for k in ("num_robots", "num_tasks", "queue_len", "episode_mode")}
+    sim_results = rtaw_eval_policies({**sim_keys, **cfg["sim"]}, cfg)
     same = mpdm_path == sim_results["mpdm"]["ttd"]
     print(f"MPDM through the wrapper == rtaw_marl.evaluation: {same}")
     if not same:

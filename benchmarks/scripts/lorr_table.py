@@ -7,7 +7,7 @@ Usage::
 
 Each argument is an ``rtaw-lorr`` results file, optionally ``:`` an ``rtaw-eval`` results
 file (or several joined by ``+``: same seeds, other policies) of the same problem and
-horizon (``scenario=lorr env.horizon=T``); ``--write``
+horizon (``scenario=lorr sim.horizon=T``); ``--write``
 replaces the ``lorr`` section of a markdown file (between its BEGIN and END markers).
 """
 
@@ -19,6 +19,7 @@ import re
 from pathlib import Path
 
 from benchmarks.lorr_judge import judge_markdown
+from rtaw_marl.evaluation.results_file import read_results
 
 
 def _section(pair: str) -> str:
@@ -26,7 +27,7 @@ def _section(pair: str) -> str:
     official = json.loads(Path(official_path).read_text())
     own = _merged(own_paths.split("+")) if own_paths else None
     own_path = own_paths
-    if own is not None and int(own["config"]["env"]["horizon"]) != int(
+    if own is not None and int(own["config"]["sim"]["horizon"]) != int(
         official["config"]["timesteps"]
     ):
         raise SystemExit(f"{own_path}: not the horizon of {official_path}")
@@ -36,14 +37,20 @@ def _section(pair: str) -> str:
 
 
 def _merged(paths: list[str]) -> dict:
-    """Several rtaw-eval results of one setting and seeds (other policies), as one."""
-    first = json.loads(Path(paths[0]).read_text())
+    """Several rtaw-eval results of one setting and seeds (other policies), as one
+    (read by the package's one reader: an older file's ``config.env`` is ``config.sim``)."""
+    first = _payload(paths[0])
     for path in paths[1:]:
-        other = json.loads(Path(path).read_text())
-        if other["config"]["env"] != first["config"]["env"] or other["seeds"] != first["seeds"]:
+        other = _payload(path)
+        if other["config"]["sim"] != first["config"]["sim"] or other["seeds"] != first["seeds"]:
             raise SystemExit(f"{path}: not the setting and seeds of {paths[0]}")
         first["policies"] = {**first["policies"], **other["policies"]}
     return first
+
+
+def _payload(path: str) -> dict:
+    results = read_results(path)
+    return {"config": results.config, "seeds": results.seeds, "policies": results.policies}
 
 
 def main() -> None:

@@ -5,7 +5,7 @@ Usage::
     python -m benchmarks.scripts.reward_ablation            # train the three policies, then evaluate
     python -m benchmarks.scripts.reward_ablation --eval     # evaluate existing runs only
 
-Trains ``env.reward=ttd|length|ttd_length`` on layout A with A*, 10 robots, designated
+Trains ``sim.reward=ttd|length|ttd_length`` on layout A with A*, 10 robots, designated
 tasks (``algo=ppo_fast``, 102,400 frames, seed 0;
 :func:`benchmarks.variants.reward_command`) into ``runs/ablation/<reward>``, then
 evaluates each best checkpoint with the TTD reward's environment (the reward does not

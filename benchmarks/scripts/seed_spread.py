@@ -60,7 +60,7 @@ def table2_rows(name: str, runs: dict[int, Path], robots: list[int], seeds: list
         raise SystemExit("error: benchmarks/data/table2.json is missing or has other seeds")
     cells = [
         c for c in STUDIES["table2"].cells(seeds)
-        if c.scenario.policies["RTAW+"] == name and c.scenario.env["num_robots"] in robots
+        if c.scenario.policies["RTAW+"] == name and c.scenario.sim["num_robots"] in robots
     ]  # fmt: skip
     policies = {f"seed {k}": checkpoint(path) for k, path in runs.items()}
     cells = [dataclasses.replace(c, policies=policies) for c in cells]

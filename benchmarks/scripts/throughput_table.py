@@ -15,17 +15,24 @@ published figures beside the ``warehouse_large`` rows; ``--write`` replaces the
 from __future__ import annotations
 
 import argparse
-import json
 import re
 from pathlib import Path
 
+from rtaw_marl.evaluation.results_file import read_results
 from rtaw_marl.evaluation.throughput import throughput_markdown
 
 
 def _label(payload: dict) -> str:
-    env, problem = payload["config"]["env"], Path(payload["config"]["tasks"]["problem"])
+    sim, problem = payload["config"]["sim"], Path(payload["config"]["tasks"]["problem"])
     name = "warehouse_large" if "warehouse_large" in problem.name else problem.stem
-    return f"{name}, M={int(env['num_robots']):,}, T={int(env['horizon']):,}"
+    return f"{name}, M={int(sim['num_robots']):,}, T={int(sim['horizon']):,}"
+
+
+def _payload(path: Path) -> dict:
+    """A results file, read and checked by the package's one reader (an older file's
+    ``config.env`` under today's ``config.sim``)."""
+    results = read_results(path)
+    return {"config": results.config, "seeds": results.seeds, "policies": results.policies}
 
 
 def main() -> None:
@@ -35,21 +42,21 @@ def main() -> None:
     args = parser.parse_args()
     merged: dict[str, dict] = {}
     for path in args.results:
-        payload = json.loads(path.read_text())
+        payload = _payload(path)
         label = _label(payload)
         if label not in merged:
             merged[label] = payload
             continue
         # Several rtaw-eval runs of one setting (other policies): one row group.
         first = merged[label]
-        if first["config"]["env"] != payload["config"]["env"] or first["seeds"] != payload["seeds"]:
+        if first["config"]["sim"] != payload["config"]["sim"] or first["seeds"] != payload["seeds"]:
             raise SystemExit(f"{path}: not the setting and seeds of the other {label} results")
         twice = set(first["policies"]) & set(payload["policies"])
         if twice:
             raise SystemExit(f"{path}: {sorted(twice)[0]} is evaluated twice for {label}")
         first["policies"] = {**first["policies"], **payload["policies"]}
     order = sorted(
-        merged, key=lambda k: ("warehouse" in k, merged[k]["config"]["env"]["num_robots"])
+        merged, key=lambda k: ("warehouse" in k, merged[k]["config"]["sim"]["num_robots"])
     )
     table = throughput_markdown([(k, merged[k]) for k in order])
     if args.write is None:

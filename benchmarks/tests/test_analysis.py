@@ -23,7 +23,7 @@ from rtaw_marl.sim.builder import build_sim
 pytestmark = pytest.mark.unit
 
 ROOT = Path(__file__).resolve().parents[2]
-TINY = SCENARIOS["C_astar_m10"].with_env(
+TINY = SCENARIOS["C_astar_m10"].with_sim(
     num_robots=3, num_tasks=15, queue_len=5, episode_mode="drain"
 )
 
@@ -120,7 +120,7 @@ def test_the_study_reads_its_rows_from_the_scenarios() -> None:
     cells = study.cells([0, 1])
     assert [c.key for c in cells] == ["A* layout C", "Direct (open 60x60)"]
     c = cells[0]
-    assert c.scenario == SCENARIOS["C_astar_m10"].with_env(episode_mode="drain")
+    assert c.scenario == SCENARIOS["C_astar_m10"].with_sim(episode_mode="drain")
     assert list(c.policies) == ["MPDM", "RTAW+", "RTAW", "lookahead"]
     assert c.policies["RTAW+"].name == "C_astar_m10_long_plus"
     assert c.seeds == (0, 1)

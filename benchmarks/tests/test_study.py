@@ -29,7 +29,7 @@ from rtaw_marl.sim.builder import build_sim
 
 pytestmark = pytest.mark.integration
 
-SMALL = SCENARIOS["C_astar_m10"].with_env(num_tasks=30)
+SMALL = SCENARIOS["C_astar_m10"].with_sim(num_tasks=30)
 
 
 def _study(policies: dict | None = None) -> Study:

@@ -34,7 +34,7 @@ def fake(monkeypatch):
 
     def run_cell(job):
         cell, todo, _, _ = job
-        calls.append((cell.key, tuple(todo), str(cell.scenario.spec().env.episode_mode)))
+        calls.append((cell.key, tuple(todo), str(cell.scenario.spec().sim.episode_mode)))
         ttd = fake_ttd(todo, len(cell.seeds))
         return cell.key, ttd, dict.fromkeys(ttd, 0.1)
 
@@ -73,7 +73,7 @@ def test_table1_is_every_row_at_both_robot_counts_with_its_long_policies(fake, t
     assert {mode for *_, mode in fake} == {"paper"}
     assert all(labels == ORDER for _, labels, _ in fake)
     cells = STUDIES["table1_drain"].cells([0])
-    assert {c.scenario.spec().env.episode_mode for c in cells} == {"drain"}
+    assert {c.scenario.spec().sim.episode_mode for c in cells} == {"drain"}
     learned = {ref.name for c in cells for k, ref in c.policies.items() if k.startswith("RTAW")}
     assert len(learned) == 24
     assert all(name.endswith(("_long", "_long_plus")) for name in learned)
@@ -104,8 +104,8 @@ def test_navigators_run_each_execution_without_noise(tmp_path):
     cells = STUDIES["navigators"].cells([0])
     assert len(cells) == 15
     for c in cells:
-        env = c.scenario.spec().env
-        assert (env.num_tasks, env.noise_mean, env.noise_var) == (50, 0.0, 0.0)
+        sim = c.scenario.spec().sim
+        assert (sim.num_tasks, sim.noise_mean, sim.noise_var) == (50, 0.0, 0.0)
         assert c.policies["RTAW+"].name.endswith("_astar_m10_plus")
 
 
@@ -134,7 +134,7 @@ def test_the_horizon_check_runs_on_selection_seeds_and_h0_is_mpdm(tmp_path):
     assert len(s.default_seeds) >= 20
     from benchmarks.study import Cell, Study, rule
 
-    tiny = SCENARIOS["C_astar_m10"].with_env(num_robots=5, num_tasks=40, episode_mode="paper")
+    tiny = SCENARIOS["C_astar_m10"].with_sim(num_robots=5, num_tasks=40, episode_mode="paper")
     policies = {"MPDM": rule("mpdm"), "H=0": rule("lookahead", lookahead_horizon=0),
                 "H=3": rule("lookahead")}  # fmt: skip
 

@@ -165,7 +165,7 @@ def _exit_on_user_error(fn: Callable[[DictConfig], Any]) -> Callable[[DictConfig
 
 
 def _sweep_job() -> str | None:
-    """``job 3 (env.num_robots=0)`` inside a multirun job, else ``None``."""
+    """``job 3 (sim.num_robots=0)`` inside a multirun job, else ``None``."""
     if not HydraConfig.initialized():
         return None
     hydra_cfg = HydraConfig.get()

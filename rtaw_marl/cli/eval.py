@@ -3,8 +3,8 @@
 Examples::
 
     rtaw-eval scenario=poc policy=[mpdm,rbts]
-    rtaw-eval env.num_robots=100 env.num_tasks=500 navigator=astar layout=open seeds=[0,1,2]
-    rtaw-eval --multirun env.num_robots=10,100 navigator=direct,astar
+    rtaw-eval sim.num_robots=100 sim.num_tasks=500 navigator=astar layout=open seeds=[0,1,2]
+    rtaw-eval --multirun sim.num_robots=10,100 navigator=direct,astar
     rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=[runs/a/best.pt,runs/b/best.pt]
     rtaw-eval policy=[mpdm,rbts,hindsight] compare_to=rbts lower_bound=true
     rtaw-eval ... output=runs/big/results.json resume=true   # after a kill: skip finished episodes

@@ -9,8 +9,8 @@ carried tasks and their destinations.
 Examples::
 
     rtaw-render layout=A policy=pretrained pretrained=A_astar_m10 output=episode.gif
-    rtaw-render navigator=cbs env.num_tasks=20 every=2 fps=12
-    rtaw-render scenario=lorr tasks.problem=P.json env.horizon=500 output=episode.json
+    rtaw-render navigator=cbs sim.num_tasks=20 every=2 fps=12
+    rtaw-render scenario=lorr tasks.problem=P.json sim.horizon=500 output=episode.json
 
 A GIF shows robots in 18 cycling colours: to follow one robot in a large fleet, use
 ``rtaw-view`` (an interactive page: search a robot or task and follow it).

@@ -3,7 +3,7 @@
 Examples::
 
     rtaw-train scenario=poc frames=30000
-    rtaw-train env.num_robots=10 frames=500000 collector.workers=2
+    rtaw-train sim.num_robots=10 frames=500000 collector.workers=2
     rtaw-train resume=outputs/train/<date>/<time>/checkpoints/last.pt frames=1000000
 """
 

@@ -10,7 +10,7 @@ checked on the configured map. Progress goes to stderr.
 Examples::
 
     rtaw-view layout=A policy=[mpdm,lookahead] output=view.html
-    rtaw-view scenario=lorr tasks.problem=P.json env.num_robots=10000 policy=mpdm
+    rtaw-view scenario=lorr tasks.problem=P.json sim.num_robots=10000 policy=mpdm
     rtaw-view scenario=lorr tasks.problem=P.json schedule=lifelong_output.json
 """
 

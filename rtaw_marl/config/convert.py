@@ -14,10 +14,12 @@ from omegaconf import BooleanNode, DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from rtaw_marl.config.help import register_help
-from rtaw_marl.config.store import CONF_DIR, register_configs
+from rtaw_marl.config.store import APPS, CONF_DIR, register_configs
 from rtaw_marl.errors import ConfigError, RtawError, did_you_mean
-from rtaw_marl.training.config import renamed_key
+from rtaw_marl.sim.builder import SimGroups
+from rtaw_marl.training.config import RENAMED as TRAIN_RENAMED
 from rtaw_marl.utils.plain import as_plain
+from rtaw_marl.utils.renamed import RENAMED, renamed_key
 
 __all__ = [
     "CONF_DIR",
@@ -93,21 +95,27 @@ def check_overrides(cfg: DictConfig, overrides: Sequence[str]) -> None:
 
 
 def check_renamed(config_name: str, overrides: Sequence[str]) -> None:
-    """Refuse a key that was renamed, naming its new name: ``rtaw-train
-    eval.every_frames=1024`` is ``selection.every_frames`` now
-    (:data:`rtaw_marl.training.config.RENAMED`). Checked before composing, whose own
-    error would only say the key is unknown.
+    """Refuse a key that was renamed, naming its new name: ``env.num_robots=50`` is
+    ``sim.num_robots`` now in every command with the simulator's keys
+    (:data:`rtaw_marl.utils.renamed.RENAMED`), ``rtaw-train eval.every_frames=1024``
+    ``selection.every_frames`` (:data:`rtaw_marl.training.config.RENAMED`). Checked
+    before composing, whose own error would only say the key is unknown.
 
     Raises:
-        ConfigError: An override sets (or adds, or deletes) a renamed key.
+        ConfigError: An override sets (or adds, or deletes) a renamed key, or chooses
+            an option of a renamed group (``env=default``).
     """
-    if config_name != "train":
+    if config_name == "train":
+        table = TRAIN_RENAMED
+    elif isinstance(APPS.get(config_name), type) and issubclass(APPS[config_name], SimGroups):
+        table = RENAMED
+    else:
         return
     for text in overrides:
         if text.startswith("-") or ("=" not in text and not text.startswith("~")):
             continue
         key = text.partition("=")[0].lstrip("~+").partition("@")[0].strip()
-        message = renamed_key(key)
+        message = renamed_key(key, table)
         if message is not None:
             raise ConfigError(message)
 
@@ -199,8 +207,8 @@ def config_error(exc: BaseException) -> RtawError:
 
 
 def _unknown_key(key: str, schema: type) -> ConfigError:
-    """``unknown config key 'env.num_robot'; valid keys there: ...; did you mean
-    'env.num_robots'?`` for a ``key`` that ``schema`` (its parent's) does not declare."""
+    """``unknown config key 'sim.num_robot'; valid keys there: ...; did you mean
+    'sim.num_robots'?`` for a ``key`` that ``schema`` (its parent's) does not declare."""
     group, _, leaf = key.rpartition(".")
     parent = f"{group}." if group else ""
     keys = [f.name for f in dataclasses.fields(schema) if f.name != "name"]  # type: ignore[arg-type]

@@ -40,7 +40,7 @@ APPENDABLE: dict[str, tuple[str, ...]] = {"train": ("zoo",)}
 
 #: One line per config group, shown beside its options.
 GROUP_DOCS: dict[str, str] = {
-    "env": "fleet, queue, episode and noise",
+    "sim": "the simulator: fleet, queue, episode and noise",
     "layout": "the warehouse map",
     "navigator": "distances, and how robots travel (instant or collision-free)",
     "tasks": "the task stream",
@@ -66,7 +66,7 @@ def app_groups(app: str) -> list[str]:
     primary = yaml.safe_load((CONF_DIR / f"{app}.yaml").read_text()) or {}
     groups = []
     for entry in primary.get("defaults", []):
-        # "- env: default" names a group; "- /schema/eval@_here_" and "- _self_" do not.
+        # "- sim: default" names a group; "- /schema/eval@_here_" and "- _self_" do not.
         if isinstance(entry, dict) and len(entry) == 1:
             (key,) = entry
             group = str(key).partition("@")[0]

@@ -7,7 +7,7 @@ the registry: no YAML file is written, so none can drift from it. A node is what
 YAML file would hold, package ``_global_``:
 
 * a scenario's ``defaults`` list overrides the ``layout``, ``navigator`` and ``tasks``
-  groups with its options (``override /layout: C``), and its ``env``, ``layout``,
+  groups with its options (``override /layout: C``), and its ``sim``, ``layout``,
   ``navigator`` and ``tasks`` sections set the keys it changes besides;
   ``scenario=default`` sets nothing: each command's own defaults are the default
   scenario (``rtaw-render`` keeps its SIPP execution; the tests check that ``rtaw-eval``
@@ -27,11 +27,11 @@ from typing import Any
 from hydra.core.config_store import ConfigStore
 
 from rtaw_marl.scenarios import ROWS, SCENARIOS, Scenario
-from rtaw_marl.sim.lorr import LORR_ENV
+from rtaw_marl.sim.lorr import LORR_SIM
 
 __all__ = ["LORR", "SIM_GROUPS", "lorr_node", "register_scenarios", "row_node", "scenario_node"]
 
-#: The option groups a scenario chooses (its ``env`` keys are values, not a choice).
+#: The option groups a scenario chooses (its ``sim`` keys are values, not a choice).
 SIM_GROUPS = ("layout", "navigator", "tasks")
 #: The ``scenario`` option of a LoRR problem file.
 LORR = "lorr"
@@ -48,8 +48,8 @@ def scenario_node(s: Scenario) -> dict[str, Any]:
         defaults.append({f"override /{group}": name})
         if keys:
             sections[group] = keys
-    env = {"env": dict(s.env)} if s.env else {}
-    return {"defaults": defaults, **env, **sections}
+    sim = {"sim": dict(s.sim)} if s.sim else {}
+    return {"defaults": defaults, **sim, **sections}
 
 
 def row_node(row: str) -> dict[str, Any]:
@@ -63,11 +63,11 @@ def row_node(row: str) -> dict[str, Any]:
 
 def lorr_node() -> dict[str, Any]:
     """The ``scenario=lorr`` option: a LoRR problem named by ``tasks.problem``."""
-    env = {
+    sim = {
         "num_robots": "${lorr:num_robots,${tasks.problem}}",
-        "queue_len": "${lorr:queue_len,${tasks.problem},${env.num_robots}}",
-        "num_tasks": "${lorr:num_tasks,${tasks.problem},${env.num_robots},${env.horizon}}",
-        **LORR_ENV,
+        "queue_len": "${lorr:queue_len,${tasks.problem},${sim.num_robots}}",
+        "num_tasks": "${lorr:num_tasks,${tasks.problem},${sim.num_robots},${sim.horizon}}",
+        **LORR_SIM,
     }
     return {
         "defaults": [
@@ -75,7 +75,7 @@ def lorr_node() -> dict[str, Any]:
             {"override /navigator": "pibt"},
             {"override /tasks": "lorr"},
         ],
-        "env": env,
+        "sim": sim,
         "layout": {"problem": "${tasks.problem}"},
     }
 

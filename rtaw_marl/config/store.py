@@ -8,7 +8,7 @@ the config, and :func:`rtaw_marl.config.to_typed` turns the result into dataclas
 
 Options made from a registry are stored here too, with no YAML file: the navigators
 that change simulator keys (``navigator=sipp`` turns the completion noise off, from
-``SIPPConfig.env_defaults``), ``scenario=NAME`` and ``row=NAME``
+``SIPPConfig.sim_defaults``), ``scenario=NAME`` and ``row=NAME``
 (:mod:`rtaw_marl.config.scenarios`) and ``+zoo=NAME`` (the shipped policies' recipes).
 """
 
@@ -42,7 +42,7 @@ CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
 
 #: Config group -> option name -> schema dataclass.
 GROUPS: dict[str, dict[str, type]] = {
-    "env": {"default": SimConfig},
+    "sim": {"default": SimConfig},
     "layout": dict(LAYOUTS),
     "navigator": dict(NAVIGATORS),
     "tasks": dict(TASK_STREAMS),
@@ -87,9 +87,9 @@ def register_configs() -> None:
     for name, schema in APPS.items():
         store.store(group="schema", name=name, node=_node(schema))
     # navigator=sipp|cbs|pibt: also the simulator keys the option changes (the completion
-    # noise off), from the option's own env_defaults: one place for that rule.
+    # noise off), from the option's own sim_defaults: one place for that rule.
     for name, option in NAVIGATORS.items():
-        if option.env_defaults:
+        if option.sim_defaults:
             store.store(group="navigator", name=name, node=_navigator_node(name, option),
                         package="_global_")  # fmt: skip
     # scenario=NAME and row=NAME: the scenario registry's entries (config.scenarios).
@@ -117,18 +117,18 @@ def group_options(group: str) -> list[str]:
 
 def _navigator_node(name: str, option: type) -> dict[str, Any]:
     """``navigator=NAME`` for an option that changes simulator keys: its schema as the
-    ``navigator`` group, and those keys (:attr:`NavigatorOption.env_defaults`) in ``env``,
+    ``navigator`` group, and those keys (:attr:`NavigatorOption.sim_defaults`) in ``sim``,
     under the user's own overrides."""
     return {
         "defaults": [f"/schema/navigator/{name}@navigator", "_self_"],
-        "env": dict(option.env_defaults),
+        "sim": dict(option.sim_defaults),
     }
 
 
 def _zoo_node(overrides: list[str]) -> dict[str, Any]:
     """A zoo recipe's ``rtaw-train`` overrides as a ``zoo`` option: its option
     choices (``layout=A``) become ``override /layout`` entries of a defaults list, its
-    values (``env.num_robots=10``) a nested dict."""
+    values (``sim.num_robots=10``) a nested dict."""
     defaults: list[Any] = []
     values: dict[str, Any] = {}
     for override in overrides:

@@ -92,11 +92,12 @@ reset options), anything else raises `EnvUsageError` naming what was passed.
 ## Arguments
 
 `WarehouseEnv(layout=None, navigator=None, tasks=None, render_mode=None,
-observation="full", obs_format="flat", scenario=None, **env)`: as the PettingZoo env's
-`env(...)` (`**env` the `SimConfig` keys `num_robots`, `num_tasks`, `queue_len`,
-`episode_mode`, `noise_mean`, `noise_var`, `reward`, ...; `scenario` a named setting,
-which the groups and keys given override), only `obs_format` defaults to `"flat"`; an
-unknown key, option or scenario is a `ConfigError` listing them.
+observation="full", obs_format="flat", scenario=None, **sim_keys)`: as the PettingZoo
+env's `env(...)` (`**sim_keys` the `SimConfig` keys, the `sim.*` config keys:
+`num_robots`, `num_tasks`, `queue_len`, `episode_mode`, `noise_mean`, `noise_var`,
+`reward`, ...; `scenario` a named setting, which the groups and keys given override),
+only `obs_format` defaults to `"flat"`; an unknown key, option or scenario is a
+`ConfigError` listing them.
 
 ## Version History
 
@@ -147,7 +148,7 @@ class WarehouseEnv(gymnasium.Env):
         observation: str = "full",
         obs_format: str = "flat",
         scenario: str | Scenario | None = None,
-        **env: Any,
+        **sim_keys: Any,
     ) -> None:
         """Build the env (module docstring, *Arguments*).
 
@@ -161,17 +162,17 @@ class WarehouseEnv(gymnasium.Env):
             raise ConfigError(
                 f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
             )
-        spec = spec_with(scenario, env, layout, navigator, tasks)
+        spec = spec_with(scenario, sim_keys, layout, navigator, tasks)
         self.obs_layout = ObservationLayout(
-            observation, obs_format, spec.env.num_robots, spec.env.queue_len
+            observation, obs_format, spec.sim.num_robots, spec.sim.queue_len
         )
         self.sim: WarehouseSim = build_sim(spec)
         self.render_mode = render_mode
         self.observation_space = features_space(self.obs_layout)
-        self.action_space = spaces.Discrete(spec.env.queue_len)
+        self.action_space = spaces.Discrete(spec.sim.queue_len)
         self._views = AgentViews(self.sim, self.obs_layout)
         self._robot = 0  # the robot of the last observation handed out
-        self._mask = np.zeros(spec.env.queue_len, dtype=np.int8)
+        self._mask = np.zeros(spec.sim.queue_len, dtype=np.int8)
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None

@@ -148,11 +148,11 @@ next be free), `*` the robot choosing now, then a status line.
 ## Arguments
 
 `env(layout=None, navigator=None, tasks=None, render_mode=None, observation="full",
-obs_format="dict", scenario=None, **env)`: `scenario` names a setting of
+obs_format="dict", scenario=None, **sim_keys)`: `scenario` names a setting of
 `rtaw_marl.scenarios.SCENARIOS` (as `scenario=NAME` on the command line; the other
-arguments override it), `layout="C"` is the paper's layout C as `layout=C` is; `**env`
-are the keys of `SimConfig` (`num_robots=10, num_tasks=500, queue_len=10,
-episode_mode="drain", noise_mean=0.25, noise_var=0.25,
+arguments override it), `layout="C"` is the paper's layout C as `layout=C` is;
+`**sim_keys` are the keys of `SimConfig`, the `sim.*` config keys (`num_robots=10,
+num_tasks=500, queue_len=10, episode_mode="drain", noise_mean=0.25, noise_var=0.25,
 reward="ttd", robot_starts=None, robot_free_times=None`); an unknown key or option is a
 `ConfigError` listing them. `layout` and `tasks` take a name, a `{"name": ..., **keys}`
 mapping, a typed option (`rtaw_marl.sim.options`) or an object (`Layout`, `TaskStream`),
@@ -325,7 +325,7 @@ class raw_env(AECEnv):
         observation: str = "full",
         obs_format: str = "dict",
         scenario: str | Scenario | None = None,
-        **env: Any,
+        **sim_keys: Any,
     ) -> None:
         """Build the env (see the module docstring, *Arguments*).
 
@@ -341,7 +341,8 @@ class raw_env(AECEnv):
             scenario: A :data:`~rtaw_marl.scenarios.SCENARIOS` name or a
                 :class:`~rtaw_marl.scenarios.Scenario` (``lorr_scenario(path)``: a LoRR
                 problem); the groups and keys given here override it.
-            **env: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`).
+            **sim_keys: Simulator keys (:class:`~rtaw_marl.sim.config.SimConfig`, the
+                ``sim.*`` config keys).
 
         Raises:
             ConfigError: An unknown or invalid option or key.
@@ -354,8 +355,8 @@ class raw_env(AECEnv):
             raise ConfigError(
                 f"Unknown render_mode {render_mode!r}. Available: None, {', '.join(modes)}"
             )
-        spec = spec_with(scenario, env, layout, navigator, tasks)
-        m, n = spec.env.num_robots, spec.env.queue_len
+        spec = spec_with(scenario, sim_keys, layout, navigator, tasks)
+        m, n = spec.sim.num_robots, spec.sim.queue_len
         self.obs_layout = ObservationLayout(observation, obs_format, m, n)
         self.sim: WarehouseSim = build_sim(spec)
         self.render_mode = render_mode

@@ -130,7 +130,7 @@ class BatchedWarehouseEnv(EnvBase):
         self._own = "tasks" in self.keys
         self._relational = bool(set(RELATIONAL_KEYS) & set(self.keys))
         factory = SimFactory(spec)
-        b, m, n = int(num_envs), spec.env.num_robots, spec.env.queue_len
+        b, m, n = int(num_envs), spec.sim.num_robots, spec.sim.queue_len
         self.num_envs, self.num_robots, self.queue_len = b, m, n
         self.scale = factory.layout.scale
         self._robot_xy = np.zeros((b, m, 2), dtype=np.int64)

@@ -24,6 +24,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.journal import NOT_SETTING
 from rtaw_marl.evaluation.results_file import read_results
 from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
+from rtaw_marl.utils.renamed import upgrade_command
 
 __all__ = [
     "RESULTS_NAME",
@@ -161,7 +162,9 @@ def _flatten(config: Mapping[str, Any], prefix: str = "") -> Iterable[tuple[str,
 
 def _overrides(path: Path) -> dict[str, str] | None:
     """The job's overrides (``.hydra/overrides.yaml``) by key, without the options
-    that are no setting; ``None`` when the file is not there.
+    that are no setting; ``None`` when the file is not there. Overrides written before
+    the simulator's keys were renamed (``env.num_robots=10``) are read under today's
+    names (``sim.num_robots``), as the results file's config is.
 
     Raises:
         ConfigError: The file cannot be read, or is not what Hydra writes there (a list
@@ -171,7 +174,7 @@ def _overrides(path: Path) -> dict[str, str] | None:
     if not file.is_file():
         return None
     out: dict[str, str] = {}
-    for item in _override_items(file):
+    for item in upgrade_command(_override_items(file)):
         key, _, value = item.partition("=")
         key = key.lstrip("+~")
         if key.split(".")[0].split("/")[0] not in (*NOT_SETTING, "hydra"):

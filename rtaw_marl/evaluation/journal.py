@@ -6,7 +6,8 @@ contents hash of the policy's file and its metrics), each appended in one write 
 fsynced. A kill can only tear the line being written; reading keeps the complete lines
 and drops the torn tail. ``resume=true`` replays the journal's episodes instead of
 running them again, if it was written by the same evaluation setting (its first line
-records the config).
+records the config; one written before the simulator's keys were renamed ``sim`` records
+them as ``env`` and is read under today's names).
 
 Episodes are matched by the *contents* of the files they depend on, never by path:
 the setting holds each input file (``layout.path``, ``tasks.path``) as its sha256
@@ -29,6 +30,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.lorr import read_problem
 from rtaw_marl.sim.maps import resolve_path
 from rtaw_marl.utils.atomic import disk_full_guard
+from rtaw_marl.utils.renamed import upgrade_config
 from rtaw_marl.utils.signals import signals_held
 
 __all__ = [
@@ -200,10 +202,13 @@ class EpisodeJournal:
             )
         if fmt != FORMAT:
             raise ConfigError(f"resume=true: {self.path} is not an episode journal")
-        if header["setting"] != self.setting:
+        setting = header["setting"]
+        if isinstance(setting, dict):  # written before the simulator's keys were "sim": "env"
+            setting = upgrade_config(setting)
+        if setting != self.setting:
             raise ConfigError(
                 f"resume=true: {self.path} holds episodes of another setting "
-                f"(differs in {', '.join(_differences(header['setting'], self.setting))}); "
+                f"(differs in {', '.join(_differences(setting, self.setting))}); "
                 "use another output or drop resume"
             )
 

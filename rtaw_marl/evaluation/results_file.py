@@ -13,7 +13,9 @@
 The same per-episode values as a tidy table are ``results.csv``
 (:mod:`rtaw_marl.evaluation.tidy`). :func:`read_results` is the one reader: it checks a
 file in full (:func:`check_results`) before any of it is used, and names the file in
-its one-line error.
+its one-line error. A file written before the simulator's config group was renamed
+``sim`` holds its keys under ``config.env``: it is read under today's names
+(:func:`upgrade_payload`), so old and new files combine.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.report import comparisons
 from rtaw_marl.sim.inputs import seed_list
+from rtaw_marl.utils.renamed import upgrade_config
 
 __all__ = [
     "MAX_DEPTH",
@@ -36,6 +39,7 @@ __all__ = [
     "check_results",
     "read_results",
     "results_payload",
+    "upgrade_payload",
 ]
 
 #: The keys every results file has (a reader refuses a file without them).
@@ -84,7 +88,8 @@ class ResultsFile:
 
     Attributes:
         path: The file.
-        config: The evaluation's resolved config.
+        config: The evaluation's resolved config, under today's names (an old file's
+            ``env`` section is ``sim``).
         seeds: The episode seeds: distinct integers >= 0.
         policies: ``{policy: {metric: [one value per seed]}}``; every ``ttd`` value a
             finite number, every other metric's a finite number or ``null``.
@@ -128,8 +133,19 @@ def read_results(path: str | Path) -> ResultsFile:
     return check_results(data, path)
 
 
+def upgrade_payload(data: Mapping[str, Any]) -> dict[str, Any]:
+    """A loaded results file under today's names: a ``config`` written before the
+    simulator's group was renamed (``config.env``) has it as ``config.sim``, in the same
+    place; anything else comes back as it was (a shallow copy)."""
+    out = dict(data)
+    if isinstance(out.get("config"), Mapping):
+        out["config"] = upgrade_config(out["config"])
+    return out
+
+
 def check_results(data: Any, path: str | Path) -> ResultsFile:
-    """``data``, a loaded results file, checked in full.
+    """``data``, a loaded results file, checked in full; its config under today's names
+    (:func:`upgrade_payload`).
 
     Raises:
         ConfigError: It nests deeper than :data:`MAX_DEPTH`, a required key is missing,
@@ -145,6 +161,7 @@ def check_results(data: Any, path: str | Path) -> ResultsFile:
         raise ConfigError(f"{path}: not an rtaw-eval results file ({', '.join(REQUIRED_KEYS)})")
     if not isinstance(data["config"], dict):
         raise ConfigError(f"{path}: config is {_kind(data['config'])}, not an object")
+    data = upgrade_payload(data)
     try:
         seeds = seed_list(data["seeds"], "seeds")
     except ConfigError as exc:

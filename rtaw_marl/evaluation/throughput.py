@@ -1,4 +1,4 @@
-"""Throughput of fixed-horizon episodes (``env.episode_mode=horizon``): tasks finished.
+"""Throughput of fixed-horizon episodes (``sim.episode_mode=horizon``): tasks finished.
 
 LoRR's score, and a warehouse engineer's question: how many more tasks does a better
 allocator finish in the same time, with traffic? One timestep is one second (LoRR's
@@ -12,6 +12,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from rtaw_marl.evaluation.stats import mean_ci
+from rtaw_marl.utils.renamed import upgrade_config
 
 __all__ = ["LORR_PUBLISHED", "finished_diff", "throughput_markdown", "throughput_table"]
 
@@ -95,7 +96,8 @@ def throughput_markdown(runs: Sequence[tuple[str, Mapping]], reference: str = "m
     """One markdown table of several ``rtaw-eval`` results of horizon episodes.
 
     Args:
-        runs: ``(setting label, results.json payload)`` pairs.
+        runs: ``(setting label, results.json payload)`` pairs (a payload written
+            before the simulator's keys were ``sim`` holds them as ``env``: read too).
         reference: The rule every policy is compared with.
     """
     lines = [
@@ -104,8 +106,8 @@ def throughput_markdown(runs: Sequence[tuple[str, Mapping]], reference: str = "m
         "|---|---|---:|---:|---:|---:|---:|",
     ]
     for label, payload in runs:
-        env = payload["config"]["env"]
-        m, horizon = int(env["num_robots"]), int(env["horizon"])
+        sim = upgrade_config(payload["config"])["sim"]
+        m, horizon = int(sim["num_robots"]), int(sim["horizon"])
         results = payload["policies"]
         for name, metrics in results.items():
             done = metrics["tasks_finished"]

@@ -1,6 +1,6 @@
 """Named scenarios: one place that defines each setting the project trains and reports on.
 
-A :class:`Scenario` is a simulator spec (the ``env``, ``layout``, ``navigator`` and
+A :class:`Scenario` is a simulator spec (the ``sim``, ``layout``, ``navigator`` and
 ``tasks`` groups, as names and mappings) plus its evaluation settings: the evaluation
 seeds and the shipped learned policies that belong to it. The same name works everywhere:
 

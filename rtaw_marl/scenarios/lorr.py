@@ -4,10 +4,10 @@
 :func:`lorr_value`, derives from the problem).
 
 Both take the problem's map, tasks and start cells, LoRR's reveal window as the queue
-(``env.queue_len = ceil(numTasksReveal x M)``, ``env.refill=finish``), LoRR's
-5,000-timestep horizon and collision-free PIBT execution; ``env.num_robots`` defaults
+(``sim.queue_len = ceil(numTasksReveal x M)``, ``sim.refill=finish``), LoRR's
+5,000-timestep horizon and collision-free PIBT execution; ``sim.num_robots`` defaults
 to the problem's ``teamSize`` and the window follows it when it is changed. The values
-come from :func:`rtaw_marl.sim.lorr.lorr_env` on both paths.
+come from :func:`rtaw_marl.sim.lorr.lorr_sim` on both paths.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.scenarios.registry import Scenario
-from rtaw_marl.sim.lorr import LORR_ENV, LoRRProblem, lorr_env, read_problem
+from rtaw_marl.sim.lorr import LORR_SIM, LoRRProblem, lorr_sim, read_problem
 
 __all__ = ["lorr_scenario", "lorr_value"]
 
@@ -28,7 +28,7 @@ def lorr_scenario(
     num_robots: int | None = None,
     starts: str = "file",
     navigator: str | Mapping[str, Any] = "pibt",
-    **env: object,
+    **sim: object,
 ) -> Scenario:
     """A LoRR problem as a :class:`~rtaw_marl.scenarios.Scenario`.
 
@@ -37,13 +37,13 @@ def lorr_scenario(
         num_robots: Robots (default: the problem's ``teamSize``).
         starts: ``file`` or ``random`` start cells (``tasks.starts``).
         navigator: The navigator (``pibt`` executes collision-free at any fleet size).
-        **env: Further simulator keys (``horizon=1000``), checked by
+        **sim: Further simulator keys (``horizon=1000``), checked by
             :class:`~rtaw_marl.sim.config.SimConfig`.
     """
     if not isinstance(problem, LoRRProblem):
         problem = read_problem(problem)
-    horizon = int(env.pop("horizon", LORR_ENV["horizon"]))  # type: ignore[call-overload]
-    keys = {**lorr_env(problem, num_robots, horizon), **env}
+    horizon = int(sim.pop("horizon", LORR_SIM["horizon"]))  # type: ignore[call-overload]
+    keys = {**lorr_sim(problem, num_robots, horizon), **sim}
     name = f"lorr_{problem.path.stem}"
     return Scenario(
         name=name,
@@ -52,7 +52,7 @@ def lorr_scenario(
         layout={"name": "lorr", "problem": str(problem.path)},
         navigator=navigator,
         tasks={"name": "lorr", "problem": str(problem.path), "starts": starts},
-        env=keys,
+        sim=keys,
     )
 
 
@@ -63,5 +63,5 @@ def lorr_value(
     if problem is None or problem == "None":
         raise ConfigError("scenario=lorr needs tasks.problem=FILE.json (a LoRR 2024 problem)")
     robots = None if num_robots is None else int(num_robots)
-    t = LORR_ENV["horizon"] if horizon is None else int(horizon)
-    return int(lorr_env(read_problem(problem), robots, t)[key])
+    t = LORR_SIM["horizon"] if horizon is None else int(horizon)
+    return int(lorr_sim(read_problem(problem), robots, t)[key])

@@ -3,7 +3,7 @@
 ``warehouse_v1.env(scenario="C_astar_m10", num_robots=30)`` and
 ``gymnasium.make("rtaw/warehouse-single-v1", scenario="C_astar_m10", num_robots=30)``
 build the same simulator: the groups given override the scenario's, and the simulator
-keys given override its ``env`` keys one by one.
+keys given override its ``sim`` keys one by one.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ __all__ = ["spec_with"]
 
 def spec_with(
     named: str | Scenario | None,
-    env: Mapping[str, Any],
+    sim: Mapping[str, Any],
     layout: Any = None,
     navigator: Any = None,
     tasks: Any = None,
@@ -35,5 +35,5 @@ def spec_with(
         layout = base.layout if layout is None else layout
         navigator = base.navigator if navigator is None else navigator
         tasks = base.tasks if tasks is None else tasks
-        env = {**base.env, **env}
-    return SimSpec.of(env, layout, navigator, tasks)
+        sim = {**base.sim, **sim}
+    return SimSpec.of(sim, layout, navigator, tasks)

@@ -59,18 +59,18 @@ def member_spec(member: str) -> SimSpec:
     """
     name, *keys = str(member).split(":")
     base = scenario(name.strip())
-    env: dict[str, object] = {}
+    sim: dict[str, object] = {}
     for key in keys:
         if key in ("paper", "drain"):
-            env["episode_mode"] = key
+            sim["episode_mode"] = key
         elif key[:1] in MEMBER_KEYS and key[1:].isdigit():
-            env[MEMBER_KEYS[key[0]]] = int(key[1:])
+            sim[MEMBER_KEYS[key[0]]] = int(key[1:])
         else:
             raise ConfigError(
                 f"mix member {member!r}: {key!r} is not m<robots>, n<queue slots>, "
                 "t<tasks>, paper or drain"
             )
-    return base.with_env(**env).spec()
+    return base.with_sim(**sim).spec()
 
 
 def mix_specs(members: Sequence[str]) -> list[SimSpec]:

@@ -31,7 +31,7 @@ class Scenario:
         layout: A layout name or ``{"name": ..., **keys}`` mapping.
         navigator: A navigator name or mapping.
         tasks: A task-stream name or mapping.
-        env: Simulator keys that differ from :class:`~rtaw_marl.sim.config.SimConfig`'s
+        sim: Simulator keys that differ from :class:`~rtaw_marl.sim.config.SimConfig`'s
             defaults.
         policies: The shipped learned policies that belong to it, table label ->
             pretrained registry name (``RTAW+`` first).
@@ -44,17 +44,17 @@ class Scenario:
     layout: Spec = "shelves"
     navigator: Spec = "astar"
     tasks: Spec = "designated"
-    env: Mapping[str, Any] = field(default_factory=dict)
+    sim: Mapping[str, Any] = field(default_factory=dict)
     policies: Mapping[str, str] = field(default_factory=dict)
     seeds: tuple[int, ...] = EVAL_SEEDS
 
     def spec(self) -> SimSpec:
         """The typed simulator spec (what :func:`~rtaw_marl.sim.builder.build_sim` takes)."""
-        return SimSpec.of(dict(self.env), self.layout, self.navigator, self.tasks)
+        return SimSpec.of(dict(self.sim), self.layout, self.navigator, self.tasks)
 
-    def with_env(self, **env: Any) -> Scenario:
+    def with_sim(self, **sim: Any) -> Scenario:
         """The same scenario with some simulator keys changed (``episode_mode="paper"``)."""
-        return dataclasses.replace(self, env={**self.env, **env})
+        return dataclasses.replace(self, sim={**self.sim, **sim})
 
     def choice(self, group: str) -> tuple[str, dict[str, Any]]:
         """The option name of ``group`` (``layout``, ``navigator``, ``tasks``) and the
@@ -72,7 +72,7 @@ class Scenario:
             name, keys = self.choice(group)
             out.append(f"{group}={name}")
             out += [f"{group}.{k}={_value(v)}" for k, v in keys.items()]
-        return out + [f"env.{k}={_value(v)}" for k, v in self.env.items()]
+        return out + [f"sim.{k}={_value(v)}" for k, v in self.sim.items()]
 
 
 def _value(value: Any) -> str:
@@ -107,7 +107,7 @@ def _table1() -> list[Scenario]:
                     f"Table I: {m} robots on {where}, {navigator}, 500 designated tasks",
                     layout=layout,
                     navigator=navigator,
-                    env={"num_robots": m},
+                    sim={"num_robots": m},
                     policies={"RTAW+": f"{name}_long_plus", "RTAW": f"{name}_long"},
                 )
             )
@@ -134,7 +134,7 @@ def _table2() -> list[Scenario]:
                 layout=layout,
                 navigator=navigator,
                 tasks="random",
-                env={"num_robots": 100},
+                sim={"num_robots": 100},
                 policies={"RTAW+": f"{trained}_plus", "RTAW": trained},
             )
         )
@@ -147,7 +147,7 @@ def _table2() -> list[Scenario]:
                     layout=layout,
                     navigator=navigator,
                     tasks="random",
-                    env={"num_robots": m, "num_tasks": 5000, "episode_mode": "paper"},
+                    sim={"num_robots": m, "num_tasks": 5000, "episode_mode": "paper"},
                     policies={"RTAW+": f"{stem}_m500_random_plus", "RTAW": trained},
                 )
             )
@@ -171,7 +171,7 @@ def _appendix() -> list[Scenario]:
             layout={"name": "open", "width": 10, "height": 10},
             navigator="direct",
             tasks="poc",
-            env={
+            sim={
                 "num_robots": 2,
                 "num_tasks": 5,
                 "queue_len": 2,
@@ -189,7 +189,7 @@ def _appendix() -> list[Scenario]:
             layout={"name": "open", "width": 10, "height": 10},
             navigator="direct",
             tasks="two_task",
-            env={"num_robots": 10, "num_tasks": 500, "queue_len": 2, "episode_mode": "paper"},
+            sim={"num_robots": 10, "num_tasks": 500, "queue_len": 2, "episode_mode": "paper"},
         ),
     ]
 

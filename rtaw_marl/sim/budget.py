@@ -1,5 +1,5 @@
 """An up-front memory estimate of one simulator, so that a size nothing could hold
-(``env.num_tasks=1000000000000``, a 100000x100000 grid) is refused with the number
+(``sim.num_tasks=1000000000000``, a 100000x100000 grid) is refused with the number
 before numpy tries to allocate it.
 
 The estimate counts the arrays that grow with the settings, at the bytes each element
@@ -44,11 +44,11 @@ _PER_ROBOT = 64
 _GIB = 2**30
 
 
-def estimate_bytes(env: SimConfig, width: int, height: int, fields: bool) -> int:
-    """Bytes one simulator of ``env`` on a ``width x height`` grid needs at least.
+def estimate_bytes(sim: SimConfig, width: int, height: int, fields: bool) -> int:
+    """Bytes one simulator of ``sim`` on a ``width x height`` grid needs at least.
 
     Args:
-        env: The simulator settings.
+        sim: The simulator settings.
         width: Grid columns.
         height: Grid rows.
         fields: Whether the navigator keeps a distance field per queue slot (every
@@ -56,12 +56,12 @@ def estimate_bytes(env: SimConfig, width: int, height: int, fields: bool) -> int
     """
     cells = width * height
     padded = (width + 2) * (height + 2)
-    tasks = env.num_tasks + (env.queue_len if env.episode_mode == "paper" else 0)
+    tasks = sim.num_tasks + (sim.queue_len if sim.episode_mode == "paper" else 0)
     total = cells * _PER_CELL + tasks * _PER_TASK
     # Beyond SLOT_FIELDS_BYTES the slots keep cells, not fields (GridDistance.target_slots).
-    dense = fields and env.queue_len * padded * 4 <= SLOT_FIELDS_BYTES
-    total += env.queue_len * (_PER_SLOT + (padded * _PER_SLOT_CELL if dense else _PER_SLOT_XY))
-    return total + env.num_robots * _PER_ROBOT
+    dense = fields and sim.queue_len * padded * 4 <= SLOT_FIELDS_BYTES
+    total += sim.queue_len * (_PER_SLOT + (padded * _PER_SLOT_CELL if dense else _PER_SLOT_XY))
+    return total + sim.num_robots * _PER_ROBOT
 
 
 def memory_limit() -> int:
@@ -72,11 +72,11 @@ def memory_limit() -> int:
         return 64 * _GIB
 
 
-def check_memory(env: SimConfig, width: int, height: int, fields: bool, layout: str) -> None:
+def check_memory(sim: SimConfig, width: int, height: int, fields: bool, layout: str) -> None:
     """Refuse settings whose simulator cannot fit in this machine's memory.
 
     Args:
-        env: The simulator settings.
+        sim: The simulator settings.
         width: Grid columns.
         height: Grid rows.
         fields: Whether the navigator keeps a distance field per queue slot.
@@ -86,13 +86,13 @@ def check_memory(env: SimConfig, width: int, height: int, fields: bool, layout: 
         ConfigError: The estimate exceeds :func:`memory_limit`; the message gives both
             and the settings that drive it.
     """
-    need, limit = estimate_bytes(env, width, height, fields), memory_limit()
+    need, limit = estimate_bytes(sim, width, height, fields), memory_limit()
     if need <= limit:
         return
     raise ConfigError(
-        f"this simulator needs ~{_size(need)} of memory (env.num_tasks={env.num_tasks}, "
-        f"env.queue_len={env.queue_len}, layout {layout} {width}x{height}), more than this "
-        f"machine's {_size(limit)}; lower env.num_tasks, env.queue_len or the layout size"
+        f"this simulator needs ~{_size(need)} of memory (sim.num_tasks={sim.num_tasks}, "
+        f"sim.queue_len={sim.queue_len}, layout {layout} {width}x{height}), more than this "
+        f"machine's {_size(limit)}; lower sim.num_tasks, sim.queue_len or the layout size"
     )
 
 

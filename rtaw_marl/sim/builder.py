@@ -2,7 +2,7 @@
 
 Every entry point assembles its simulators here: the PettingZoo env, the batched
 TorchRL env, the trainer, ``rtaw-eval``, ``rtaw-render`` and the experiment scripts. A
-:class:`SimSpec` holds the four config groups (``env``, ``layout``, ``navigator``,
+:class:`SimSpec` holds the four config groups (``sim``, ``layout``, ``navigator``,
 ``tasks``) as typed options; :class:`SimFactory` builds the layout, the distance model and
 the task stream once and makes any number of simulators sharing them (the distance
 fields are cached per distance model), each with its own executor.
@@ -40,10 +40,10 @@ __all__ = ["SimFactory", "SimGroups", "SimSpec", "build_sim", "sim_config"]
 
 @dataclass(kw_only=True)
 class SimSpec:
-    """Everything that defines a simulator: the ``env``, ``layout``, ``navigator`` and
+    """Everything that defines a simulator: the ``sim``, ``layout``, ``navigator`` and
     ``tasks`` config groups, typed."""
 
-    env: SimConfig = field(default_factory=SimConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
     layout: LayoutOption = field(default_factory=ShelvesLayoutConfig)
     navigator: NavigatorOption = field(default_factory=AStarConfig)
     tasks: TaskOption = field(default_factory=DesignatedTasksConfig)
@@ -51,14 +51,14 @@ class SimSpec:
     @classmethod
     def of(
         cls,
-        env: SimConfig | Mapping[str, Any] | None = None,
+        sim: SimConfig | Mapping[str, Any] | None = None,
         layout: str | Mapping[str, Any] | LayoutOption | None = None,
         navigator: str | Mapping[str, Any] | NavigatorOption | None = None,
         tasks: str | Mapping[str, Any] | TaskOption | None = None,
     ) -> SimSpec:
         """A spec from names, ``{"name": ..., **keys}`` mappings or typed options; a
-        group left ``None`` takes its default. Simulator keys not in ``env`` (a mapping)
-        take the navigator's ``env_defaults`` (SIPP and CBS turn the completion noise
+        group left ``None`` takes its default. Simulator keys not in ``sim`` (a mapping)
+        take the navigator's ``sim_defaults`` (SIPP and CBS turn the completion noise
         off), as ``navigator=sipp`` does on the command line.
 
         Raises:
@@ -67,11 +67,11 @@ class SimSpec:
         """
         spec = cls()
         nav = spec.navigator if navigator is None else navigator_option(navigator)
-        if not isinstance(env, SimConfig):
+        if not isinstance(sim, SimConfig):
             # What the navigator's YAML twin sets (SIPP/CBS: no noise), unless given.
-            env = {**nav.env_defaults, **(env or {})}
+            sim = {**nav.sim_defaults, **(sim or {})}
         return cls(
-            env=sim_config(env),
+            sim=sim_config(sim),
             layout=spec.layout if layout is None else layout_option(layout),
             navigator=nav,
             tasks=spec.tasks if tasks is None else task_option(tasks),
@@ -88,20 +88,20 @@ class SimGroups:
     ``rtaw-render``), filled by Hydra with typed options.
 
     Attributes:
-        env: The simulator (:class:`~rtaw_marl.sim.config.SimConfig`).
+        sim: The simulator's keys (:class:`~rtaw_marl.sim.config.SimConfig`).
         layout: A layout option (:mod:`rtaw_marl.sim.options`).
         navigator: A navigator option.
         tasks: A task-stream option.
     """
 
-    env: Any
+    sim: Any
     layout: Any
     navigator: Any
     tasks: Any
 
     def sim_spec(self) -> SimSpec:
         """The typed spec the one builder takes."""
-        return SimSpec.of(self.env, self.layout, self.navigator, self.tasks)
+        return SimSpec.of(self.sim, self.layout, self.navigator, self.tasks)
 
 
 class SimFactory:
@@ -128,12 +128,12 @@ class SimFactory:
 
     def _check_memory(self, width: int, height: int, name: str) -> None:
         fields = not isinstance(self.spec.navigator, DirectConfig)
-        check_memory(self.spec.env, width, height, fields, name)
+        check_memory(self.spec.sim, width, height, fields, name)
 
     def __call__(self, buffers: SimBuffers | None = None) -> WarehouseSim:
         """A new simulator, optionally writing its state into shared ``buffers``."""
         return WarehouseSim(
-            self.spec.env,
+            self.spec.sim,
             self.layout,
             self.distance_model,
             self.tasks,
@@ -154,7 +154,7 @@ def sim_config(values: SimConfig | Mapping[str, Any]) -> SimConfig:
     allowed = [f.name for f in dataclasses.fields(SimConfig)]
     unknown = sorted(set(values) - set(allowed))
     if unknown:
-        raise ConfigError(f"unknown key env.{unknown[0]}; valid keys: {', '.join(allowed)}")
+        raise ConfigError(f"unknown key sim.{unknown[0]}; valid keys: {', '.join(allowed)}")
     return SimConfig(**dict(values))
 
 

@@ -1,4 +1,4 @@
-"""The simulator's parameters (:class:`SimConfig`, the ``env.*`` keys) and the arrays it
+"""The simulator's parameters (:class:`SimConfig`, the ``sim.*`` keys) and the arrays it
 keeps its state in (:class:`SimBuffers`)."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ REWARDS = ("ttd", "length", "ttd_length")
 
 @dataclass(frozen=True)
 class SimConfig:
-    """Parameters of the simulator (the ``env.*`` config keys).
+    """Parameters of the simulator (the ``sim.*`` config keys).
 
     Attributes:
         num_robots: ``M``, at least 1.
@@ -62,51 +62,51 @@ class SimConfig:
     robot_free_times: list[float] | None = None
 
     def __post_init__(self) -> None:
-        check_fields(self, "env.")
-        at_least(self, "env.", 1, "num_robots", "num_tasks", "queue_len")
+        check_fields(self, "sim.")
+        at_least(self, "sim.", 1, "num_robots", "num_tasks", "queue_len")
         if self.episode_mode not in EPISODE_MODES:
             raise ConfigError(
-                f"env.episode_mode must be one of {', '.join(EPISODE_MODES)}, "
+                f"sim.episode_mode must be one of {', '.join(EPISODE_MODES)}, "
                 f"got {self.episode_mode!r}"
             )
         if self.refill not in REFILLS:
             raise ConfigError(
-                f"env.refill must be one of {', '.join(REFILLS)}, got {self.refill!r}"
+                f"sim.refill must be one of {', '.join(REFILLS)}, got {self.refill!r}"
             )
         if self.episode_mode == "horizon" and self.horizon is None:
-            raise ConfigError("env.episode_mode=horizon needs env.horizon=T (timesteps)")
+            raise ConfigError("sim.episode_mode=horizon needs sim.horizon=T (timesteps)")
         if self.horizon is not None:
-            at_least(self, "env.", 1, "horizon")
+            at_least(self, "sim.", 1, "horizon")
         if self.refill == "finish" and self.queue_len <= self.num_robots:
             raise ConfigError(
-                f"env.refill=finish needs env.queue_len > env.num_robots (the revealed "
+                f"sim.refill=finish needs sim.queue_len > sim.num_robots (the revealed "
                 f"tasks include the M in progress), got {self.queue_len} <= {self.num_robots}"
             )
         if self.reward not in REWARDS:
             raise ConfigError(
-                f"env.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}"
+                f"sim.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}"
             )
-        check_number("env.noise_var", self.noise_var, minimum=0)
+        check_number("sim.noise_var", self.noise_var, minimum=0)
         # The noise is a delay on top of the shortest travel time: a robot cannot beat
         # its shortest path on average, and a negative mean would end tasks at their
         # decision time (a makespan of 0 for noise_mean=-100).
-        check_number("env.noise_mean", self.noise_mean, minimum=0)
+        check_number("sim.noise_mean", self.noise_mean, minimum=0)
         if self.robot_starts is not None:
             starts = tuple(tuple(s) for s in self.robot_starts)
             if len(starts) != self.num_robots or any(len(s) != 2 for s in starts):
                 raise ConfigError(
-                    f"env.robot_starts must hold num_robots={self.num_robots} [x, y] pairs, "
+                    f"sim.robot_starts must hold num_robots={self.num_robots} [x, y] pairs, "
                     f"got {len(starts)} entries"
                 )
             far = [v for s in starts for v in s if abs(v) > MAX_COORDINATE]
             if far:
-                raise ConfigError(f"env.robot_starts: coordinate {far[0]} is out of range")
+                raise ConfigError(f"sim.robot_starts: coordinate {far[0]} is out of range")
             object.__setattr__(self, "robot_starts", starts)
         if self.robot_free_times is not None:
             times = tuple(float(t) for t in self.robot_free_times)
             if len(times) != self.num_robots or not all(t >= 0 for t in times):
                 raise ConfigError(
-                    f"env.robot_free_times must hold num_robots={self.num_robots} finite "
+                    f"sim.robot_free_times must hold num_robots={self.num_robots} finite "
                     "non-negative times"
                 )
             object.__setattr__(self, "robot_free_times", times)

@@ -120,16 +120,16 @@ class WarehouseSim:
             raise ConfigError("the distance model was built for a different layout")
         if config.num_robots > len(layout.main_cells) and config.robot_starts is None:
             raise ConfigError(
-                f"env.num_robots={config.num_robots} exceeds the {len(layout.main_cells)} free "
+                f"sim.num_robots={config.num_robots} exceeds the {len(layout.main_cells)} free "
                 f"cells of layout {layout.name!r}"
             )
         if tasks.refill_same_slot and config.refill == "finish":
-            raise ConfigError("env.refill=finish cannot refill a slot with its own task")
+            raise ConfigError("sim.refill=finish cannot refill a slot with its own task")
         if tasks.refill_same_slot and tasks.max_tasks is None:
             fixed = getattr(tasks, "tasks", None)
             if fixed is not None and len(fixed) != config.queue_len:
                 raise ConfigError(
-                    f"this task stream refills each slot with its own task: env.queue_len must "
+                    f"this task stream refills each slot with its own task: sim.queue_len must "
                     f"be {len(fixed)}, got {config.queue_len}"
                 )
         self.config = config

@@ -276,10 +276,10 @@ def check_whole_seconds(config: SimSettings, name: str) -> None:
     if config.noise_mean != 0 or config.noise_var != 0:
         raise ConfigError(
             f"navigator {name!r} plans paths in whole seconds and times tasks by them: "
-            f"set env.noise_mean=0 env.noise_var=0 (got {config.noise_mean}, {config.noise_var})"
+            f"set sim.noise_mean=0 sim.noise_var=0 (got {config.noise_mean}, {config.noise_var})"
         )
     times = config.robot_free_times or ()
     if any(t != int(t) for t in times):
         raise ConfigError(
-            f"navigator {name!r} needs whole-second env.robot_free_times, got {list(times)}"
+            f"navigator {name!r} needs whole-second sim.robot_free_times, got {list(times)}"
         )

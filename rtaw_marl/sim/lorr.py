@@ -8,8 +8,8 @@ revealed and not yet finished (the start kit multiplies in single precision and
 truncates), a finished task replaced by the next one of the file, which cycles
 (``task_id % len(tasks)``, as the start kit's ``TaskManager``).
 
-Here that window is the queue: ``env.queue_len = int(numTasksReveal x M)`` with
-``env.refill=finish`` (the revealed tasks include the ``M`` in progress), in
+Here that window is the queue: ``sim.queue_len = int(numTasksReveal x M)`` with
+``sim.refill=finish`` (the revealed tasks include the ``M`` in progress), in
 ``episode_mode=horizon`` episodes of LoRR's 5,000 timesteps by default.
 
 Files (the start kit's ``Input_Output_Format.md``): ``.agents`` and ``.tasks`` start
@@ -47,11 +47,11 @@ from rtaw_marl.sim.maps import resolve_path
 from rtaw_marl.sim.tasks import TaskStream
 
 __all__ = [
-    "LORR_ENV",
     "LORR_HORIZON",
+    "LORR_SIM",
     "LoRRProblem",
     "LoRRTasks",
-    "lorr_env",
+    "lorr_sim",
     "read_agents",
     "read_lorr_tasks",
     "read_problem",
@@ -66,7 +66,7 @@ LORR_HORIZON = 5000
 POOL_FACTOR = 2
 
 #: The simulator keys of every LoRR scenario: fixed-horizon episodes with LoRR's window.
-LORR_ENV: dict[str, object] = {
+LORR_SIM: dict[str, object] = {
     "episode_mode": "horizon",
     "horizon": LORR_HORIZON,
     "refill": "finish",
@@ -363,12 +363,12 @@ class LoRRTasks(TaskStream):
         if count > len(self.agents):
             raise ConfigError(
                 f"{self.problem.agents_path.name} holds {len(self.agents)} start cells, "
-                f"env.num_robots={count}; use tasks.starts=random for more robots"
+                f"sim.num_robots={count}; use tasks.starts=random for more robots"
             )
         return self.agents[:count].copy()
 
 
-def lorr_env(
+def lorr_sim(
     problem: LoRRProblem, num_robots: int | None = None, horizon: int = LORR_HORIZON
 ) -> dict[str, object]:
     """The simulator keys of a LoRR problem: its robots, reveal window, a task pool that
@@ -376,13 +376,13 @@ def lorr_env(
     ``teamSize``)."""
     m = problem.team_size if num_robots is None else int(num_robots)
     if m < 1 or int(horizon) < 1:
-        key, value = ("env.num_robots", m) if m < 1 else ("env.horizon", horizon)
+        key, value = ("sim.num_robots", m) if m < 1 else ("sim.horizon", horizon)
         raise ConfigError(f"{key} must be >= 1, got {value}")
     per_robot = math.ceil(POOL_FACTOR * int(horizon) / problem.mean_task_length())
     return {
         "num_robots": m,
         "queue_len": problem.window(m),
         "num_tasks": m * per_robot + problem.window(m),
-        **LORR_ENV,
+        **LORR_SIM,
         "horizon": int(horizon),
     }

@@ -329,7 +329,7 @@ class FixedTasks(TaskStream):
         if count > len(self.tasks):
             raise ConfigError(
                 f"{self.name} holds {len(self.tasks)} tasks but the episode needs {count}; "
-                "lower env.num_tasks (paper mode needs num_tasks + queue_len)"
+                "lower sim.num_tasks (paper mode needs num_tasks + queue_len)"
             )
         return self.tasks[:count].copy()
 

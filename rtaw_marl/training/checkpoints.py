@@ -52,7 +52,7 @@ __all__ = [
 ]
 
 #: The config groups that define what a run is evaluated on.
-SCENARIO_KEYS = ("env", "layout", "navigator", "tasks")
+SCENARIO_KEYS = ("sim", "layout", "navigator", "tasks")
 
 
 @dataclass
@@ -295,10 +295,10 @@ def check_training_payload(ckpt: dict[str, Any], path: Path) -> None:
 
 
 def scenario_changes(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
-    """``["env.num_robots: 10 -> 100", ...]``: where two runs' scenarios differ (the
+    """``["sim.num_robots: 10 -> 100", ...]``: where two runs' scenarios differ (the
     groups of :data:`SCENARIO_KEYS` and the selection seeds). Either config may be a
-    stored one under old names (an ``eval`` section: :func:`~rtaw_marl.training.config.
-    upgrade_config`)."""
+    stored one under old names (``eval`` and ``env`` sections:
+    :func:`~rtaw_marl.training.config.upgrade_config`)."""
     old, new = upgrade_config(old), upgrade_config(new)
     changes = []
     for group in SCENARIO_KEYS:

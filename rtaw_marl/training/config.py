@@ -2,11 +2,12 @@
 evaluation on the selection seeds (``selection``), and the whole run. Plain Python (no
 torch), registered with Hydra by :mod:`rtaw_marl.config.store`.
 
-``selection`` was called ``eval`` before (a word ``rtaw-eval`` keeps for itself): the
-shipped checkpoints and older runs record an ``eval`` section in their ``config`` and
-``eval.*`` overrides in their ``command``. :func:`upgrade_config` and
+``selection`` was called ``eval`` before (a word ``rtaw-eval`` keeps for itself), and
+``sim`` (the simulator's keys, as in every command) ``env``: the shipped checkpoints and
+older runs record ``eval`` and ``env`` sections in their ``config`` and ``eval.*`` and
+``env.*`` overrides in their ``command``. :func:`upgrade_config` and
 :func:`upgrade_command` read those under today's names; :func:`renamed_key` names the new
-key of an old one typed on the command line."""
+key of an old one typed on the command line (:mod:`rtaw_marl.utils.renamed`)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import SELECTION_SEEDS, seed_list, seed_value
 from rtaw_marl.training.loggers.config import logger_option
+from rtaw_marl.utils import renamed
 from rtaw_marl.utils.checks import at_least, check_fields, check_number
 
 __all__ = [
@@ -192,45 +194,34 @@ class SelectionConfig:
 TrainEvalConfig = SelectionConfig
 
 #: Sections of ``rtaw-train``'s config renamed since: old name -> new name, and what the
-#: new one is (the one-line error for an old key, :func:`renamed_key`).
-RENAMED = {"eval": ("selection", "the selection seeds' evaluation during training")}
+#: new one is (the one-line error for an old key, :func:`renamed_key`): every command's
+#: (``env`` -> ``sim``, :data:`rtaw_marl.utils.renamed.RENAMED`) and its own.
+RENAMED = {
+    **renamed.RENAMED,
+    "eval": ("selection", "the selection seeds' evaluation during training"),
+}
 
 
 def renamed_key(key: str) -> str | None:
     """The one-line error for a key of ``rtaw-train`` that was renamed (``eval.seeds``:
-    ``eval.seeds is now selection.seeds (...)``); ``None`` for any other key."""
-    head, dot, rest = key.partition(".")
-    if head not in RENAMED:
-        return None
-    new, what = RENAMED[head]
-    return f"{key} is now {new}{dot}{rest} ({what})"
+    ``eval.seeds is now selection.seeds (...)``; ``env.num_robots``: ``env.num_robots is
+    now sim.num_robots (...)``); ``None`` for any other key."""
+    return renamed.renamed_key(key, RENAMED)
 
 
 def upgrade_config(config: Mapping[str, Any]) -> dict[str, Any]:
     """A stored training config (a checkpoint's ``config``) under today's names: an old
-    ``eval`` section is ``selection`` (the shipped checkpoints and older runs say
-    ``eval``). A config already under today's names comes back as it was (a copy)."""
-    out = dict(config)
-    for old, (new, _) in RENAMED.items():
-        if old in out:
-            section = out.pop(old)
-            out.setdefault(new, section)
-    return out
+    ``eval`` section is ``selection``, an old ``env`` section ``sim`` (the shipped
+    checkpoints and older runs say ``eval`` and ``env``). A config already under today's
+    names comes back as it was (a copy)."""
+    return renamed.upgrade_config(config, RENAMED)
 
 
 def upgrade_command(command: Sequence[str]) -> list[str]:
     """A recorded command (a checkpoint's ``command``) spelled with today's keys:
-    ``eval.every_frames=40960`` is ``selection.every_frames=40960``; anything else is
-    kept as it was."""
-    out = []
-    for arg in command:
-        key, sep, value = arg.partition("=")
-        head, dot, rest = key.partition(".")
-        bare = head.lstrip("+~")
-        if sep and dot and bare in RENAMED:
-            arg = f"{head[: len(head) - len(bare)]}{RENAMED[bare][0]}.{rest}={value}"
-        out.append(arg)
-    return out
+    ``eval.every_frames=40960`` is ``selection.every_frames=40960``,
+    ``env.num_robots=10`` is ``sim.num_robots=10``; anything else is kept as it was."""
+    return renamed.upgrade_command(command, RENAMED)
 
 
 @dataclass(kw_only=True)
@@ -294,7 +285,7 @@ class TrainConfig(SimGroups):
             ``mlflow``, ``wandb``, ``none``; :mod:`rtaw_marl.training.loggers.config`) or
             its name.
         resume: A checkpoint to continue from (``last.pt``). It must hold the same
-            scenario (env, layout, navigator, tasks, selection seeds) and fewer frames
+            scenario (sim, layout, navigator, tasks, selection seeds) and fewer frames
             than ``frames``.
         resume_new_scenario: Allow ``resume`` from a checkpoint of another scenario: its
             networks continue here, its best TTD and evaluation history are dropped

@@ -115,10 +115,10 @@ def make_interop_env(spec: SimSpec, seed: int) -> WarehouseWrapper:
         spec: The simulator spec.
         seed: Seed of the first reset.
     """
-    env_keys = {f.name: getattr(spec.env, f.name) for f in dataclasses.fields(spec.env)}
+    sim_keys = {f.name: getattr(spec.sim, f.name) for f in dataclasses.fields(spec.sim)}
     aec = warehouse_env(
         layout=spec.layout, navigator=spec.navigator, tasks=spec.tasks,
-        observation="full", obs_format="dict", **env_keys,
+        observation="full", obs_format="dict", **sim_keys,
     )  # fmt: skip
     return WarehouseWrapper(aec, seed=seed, training=True)
 

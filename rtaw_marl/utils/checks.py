@@ -35,11 +35,11 @@ def check_fields(obj: object, prefix: str = "") -> None:
 
     Args:
         obj: A dataclass instance.
-        prefix: How its keys are named in messages, e.g. ``"env."``.
+        prefix: How its keys are named in messages, e.g. ``"sim."``.
 
     Raises:
         ConfigError: A value does not fit its field's type; the message names the key
-            (``env.robot_starts[0][1]``) and the value.
+            (``sim.robot_starts[0][1]``) and the value.
     """
     hints = _hints(type(obj))
     for f in dataclasses.fields(obj):  # type: ignore[arg-type]

@@ -53,14 +53,18 @@ BASE = {
     "eval": ["scenario=poc", "progress=false"],
     "train": ["scenario=poc", "progress=false"],
     "render": ["scenario=poc"],
+    "view": ["scenario=poc"],
 }
+
+#: What an old ``env`` key's line says after the new key (``env`` -> ``sim``).
+SIM_RENAMED = "(the simulator's keys; env names the PettingZoo env)"
 
 _WALLED_RUN = [
     "layout.path={tmp}/walled.txt",
     "tasks=file",
     "tasks.path={tmp}/walled.csv",
     "navigator=astar",
-    "env.num_tasks=3",
+    "sim.num_tasks=3",
 ]
 
 #: (app, overrides, what the message must contain).
@@ -74,16 +78,16 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
         "huge.csv:2: coordinate 99999999999999999999999 is out of range",
     ),
     # Robot starts.
-    ("eval", ["env.robot_starts=[[a,0],[0,0]]"], "env.robot_starts[0]': Value 'a'"),
-    ("eval", ["env.robot_starts=5"], "config key 'env.robot_starts'"),
-    ("eval", ["env.robot_starts=[[inf,0],[0,0]]"], "env.robot_starts[0]': Value inf"),
-    ("eval", ["env.robot_starts=[[1.5,0],[0,0]]"], "env.robot_starts[0]': Value 1.5"),
+    ("eval", ["sim.robot_starts=[[a,0],[0,0]]"], "sim.robot_starts[0]': Value 'a'"),
+    ("eval", ["sim.robot_starts=5"], "config key 'sim.robot_starts'"),
+    ("eval", ["sim.robot_starts=[[inf,0],[0,0]]"], "sim.robot_starts[0]': Value inf"),
+    ("eval", ["sim.robot_starts=[[1.5,0],[0,0]]"], "sim.robot_starts[0]': Value 1.5"),
     (
         "eval",
-        ["navigator=sipp", "env.robot_starts=[[1,1],[1,1]]"],
+        ["navigator=sipp", "sim.robot_starts=[[1,1],[1,1]]"],
         "robots 0 and 1 both start at (x=1, y=1)",
     ),
-    ("eval", ["env.robot_free_times=[nan,0]"], "env.robot_free_times[0] must be a finite number"),
+    ("eval", ["sim.robot_free_times=[nan,0]"], "sim.robot_free_times[0] must be a finite number"),
     # Seeds.
     ("eval", ["seeds=[0,-1]"], "seeds[1] must be an integer >= 0, got -1"),
     ("eval", ["seeds=-3"], "seeds must be an integer >= 0, got -3"),
@@ -99,8 +103,8 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ),
     (
         "eval",
-        ["scenario=lorr", "tasks.problem=builtin:random_32_32_20_100.json", "env.horizon=-5"],
-        "env.horizon must be >= 1, got -5",
+        ["scenario=lorr", "tasks.problem=builtin:random_32_32_20_100.json", "sim.horizon=-5"],
+        "sim.horizon must be >= 1, got -5",
     ),
     # Hydra's grammar reads unquoted values as ASCII: the line shows the quoted form.
     (
@@ -132,6 +136,27 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
             (["--multirun", "eval.seeds=[1000],[1001]"], "seeds"),
         ]
     ],
+    # The simulator's group was env: in every command with it, the old key names the new.
+    *[
+        (app, old, f"{key} is now {new} {SIM_RENAMED}")
+        for app in ("eval", "train", "render", "view")
+        for old, key, new in [
+            (["env.num_robots=50"], "env.num_robots", "sim.num_robots"),
+            (["+env.horizon=500"], "env.horizon", "sim.horizon"),
+            (["~env.noise_var"], "env.noise_var", "sim.noise_var"),
+            (["env=default"], "env", "sim"),
+        ]
+    ],
+    (
+        "eval",
+        ["--multirun", "env.num_robots=10,100"],
+        f"env.num_robots is now sim.num_robots {SIM_RENAMED}",
+    ),
+    (
+        "train",
+        ["--multirun", "env.queue_len=5,10"],
+        f"env.queue_len is now sim.queue_len {SIM_RENAMED}",
+    ),
     # Numbers that are not numbers, or not integers.
     ("eval", ["layout.width=nan"], "config key 'layout.width': Value 'nan'"),
     ("eval", ["layout.width=10.7"], "config key 'layout.width': Value '10.7'"),
@@ -141,8 +166,8 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("train", ["algo.gamma=1.5"], "algo.gamma must lie in [0, 1], got 1.5"),
     ("train", ["algo.reward_scale=-1"], "algo.reward_scale must be > 0"),
     ("train", ["imitation.lr=inf"], "imitation.lr must be a finite number, got inf"),
-    ("eval", ["env.noise_var=inf"], "env.noise_var must be a finite number, got inf"),
-    ("eval", ["env.noise_mean=-100"], "env.noise_mean must be >= 0, got -100"),
+    ("eval", ["sim.noise_var=inf"], "sim.noise_var must be a finite number, got inf"),
+    ("eval", ["sim.noise_mean=-100"], "sim.noise_mean must be >= 0, got -100"),
     ("eval", ["tasks=designated", "tasks.sigma=inf"], "tasks.sigma must be a finite number"),
     (
         "eval",
@@ -166,8 +191,8 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
     ("train", ["interop=yes"], "interop must be true or false, got 'yes'"),
     ("train", ["algo.normalize_advantage=1"], "algo.normalize_advantage must be true or false"),
     # Sizes nothing could hold: refused up front with the estimate.
-    ("eval", ["env.num_tasks=1000000000000"], "this simulator needs ~232.8 TiB of memory"),
-    ("eval", ["env.queue_len=1000000000", "navigator=astar"], "needs ~96.9 GiB of memory"),
+    ("eval", ["sim.num_tasks=1000000000000"], "this simulator needs ~232.8 TiB of memory"),
+    ("eval", ["sim.queue_len=1000000000", "navigator=astar"], "needs ~96.9 GiB of memory"),
     ("eval", ["layout.width=100000", "layout.height=100000"], "layout open 100000x100000"),
     # Layouts.
     ("eval", _WALLED_RUN, "origin of task 0 at (x=5, y=5) cannot be reached"),
@@ -196,9 +221,9 @@ CLI_CASES: list[tuple[str, list[str], str]] = [
 ]
 
 
-def _groups(**env: Any) -> dict[str, Any]:
+def _groups(**sim: Any) -> dict[str, Any]:
     """The four simulator groups of a run config, as the Python API takes them."""
-    return {"env": env, "layout": "open", "navigator": "direct", "tasks": "poc"}
+    return {"sim": sim, "layout": "open", "navigator": "direct", "tasks": "poc"}
 
 
 #: (name, a call through the Python API, what the message must contain).
@@ -206,27 +231,27 @@ PYTHON_CASES: list[tuple[str, Callable[[], object], str]] = [
     (
         "robot_starts_float",
         lambda: SimConfig(num_robots=2, robot_starts=[[1.5, 0], [0, 0]]),
-        "env.robot_starts[0][0] must be an integer, got 1.5",
+        "sim.robot_starts[0][0] must be an integer, got 1.5",
     ),
     (
         "robot_starts_int",
         lambda: SimConfig(num_robots=2, robot_starts=5),  # type: ignore[arg-type]
-        "env.robot_starts must be a list, got 5",
+        "sim.robot_starts must be a list, got 5",
     ),
     (
         "robot_starts_str",
         lambda: SimConfig(num_robots=2, robot_starts=[["a", 0], [0, 0]]),  # type: ignore[list-item]
-        "env.robot_starts[0][0] must be an integer, got 'a'",
+        "sim.robot_starts[0][0] must be an integer, got 'a'",
     ),
     (
         "robot_starts_huge",
         lambda: SimConfig(num_robots=2, robot_starts=[[10**22, 0], [0, 0]]),
-        "env.robot_starts: coordinate 10000000000000000000000 is out of range",
+        "sim.robot_starts: coordinate 10000000000000000000000 is out of range",
     ),
     (
         "num_robots_float",
         lambda: SimConfig(num_robots=2.0),  # type: ignore[arg-type]
-        "env.num_robots must be an integer, got 2.0",
+        "sim.num_robots must be an integer, got 2.0",
     ),
     (
         "layout_width_float",
@@ -366,7 +391,7 @@ def test_task_csv_with_a_byte_order_mark_loads(files: Path, cli) -> None:
         *BASE["eval"],
         "tasks=file",
         f"tasks.path={files / 'bom.csv'}",
-        "env.num_tasks=1",
+        "sim.num_tasks=1",
         "policy=[mpdm]",
         "seeds=[0]",
         f"output={files.parent / 'results.json'}",
@@ -381,9 +406,9 @@ def test_task_csv_with_a_byte_order_mark_loads(files: Path, cli) -> None:
 )
 def test_valid_robot_starts_still_work(starts: Any) -> None:
     """Integer starts in any sequence form still build, with a collision-aware navigator."""
-    env = {"num_robots": 2, "num_tasks": 2, "queue_len": 1, "noise_mean": 0, "noise_var": 0}
+    keys = {"num_robots": 2, "num_tasks": 2, "queue_len": 1, "noise_mean": 0, "noise_var": 0}
     spec = SimSpec.of(
-        {**env, "robot_starts": starts}, {"name": "open", "width": 5}, "sipp", "random"
+        {**keys, "robot_starts": starts}, {"name": "open", "width": 5}, "sipp", "random"
     )
     sim = build_sim(spec)
     sim.reset(0)
@@ -393,7 +418,7 @@ def test_valid_robot_starts_still_work(starts: Any) -> None:
 def test_integer_centres_are_numbers(cli) -> None:
     """OmegaConf refuses ints in a nested float list; the schema takes them."""
     result = cli("eval", "tasks=designated", "tasks.pickup_centres=[[10,20]]", "policy=mpdm",
-                 "seeds=[0]", "env.num_tasks=20", "progress=false")  # fmt: skip
+                 "seeds=[0]", "sim.num_tasks=20", "progress=false")  # fmt: skip
     assert result.code == 0, result.err
 
 
@@ -405,9 +430,9 @@ def test_real_booleans_are_still_booleans() -> None:
 
 def test_walled_in_cell_is_blamed_whatever_the_task_order(files: Path) -> None:
     """The cell outside the region the others share is named, whichever task comes first."""
-    env = {"num_robots": 2, "num_tasks": 3, "queue_len": 1}
+    keys = {"num_robots": 2, "num_tasks": 3, "queue_len": 1}
     for rows, index in (([(1, 1, 0, 0), (5, 5, 2, 2), (3, 3, 1, 0)], 1), ([(5, 5, 2, 2)] * 3, 0)):
         tasks = FixedTasks(rows)
-        spec = SimSpec.of(env, str(files / "walled.txt"), "astar", tasks)
+        spec = SimSpec.of(keys, str(files / "walled.txt"), "astar", tasks)
         with pytest.raises(LayoutError, match=rf"origin of task {index} at \(x=5, y=5\)"):
             build_sim(spec).reset(0)

@@ -29,7 +29,7 @@ from rtaw_marl.utils.runs import (
 
 pytestmark = pytest.mark.integration
 
-QUICK = ("env.num_tasks=30", "progress=false", "policy=[mpdm]", "seeds=[0]")
+QUICK = ("sim.num_tasks=30", "progress=false", "policy=[mpdm]", "seeds=[0]")
 TRAIN = ("scenario=poc", "progress=false")
 NOSPACE = "No space left on device"
 

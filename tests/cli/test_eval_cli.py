@@ -23,7 +23,7 @@ from rtaw_marl.sim.builder import build_sim
 
 pytestmark = pytest.mark.integration
 
-GROUPS = ("env", "layout", "navigator", "tasks", "scenario", "row", "experiment")
+GROUPS = ("sim", "layout", "navigator", "tasks", "scenario", "row", "experiment")
 GLOBAL_GROUPS = ("scenario", "row", "experiment")  # packaged at the top level
 RTAW_EVAL = Path(sys.executable).with_name("rtaw-eval")
 
@@ -41,27 +41,27 @@ def test_every_option_composes_and_builds(group: str, option: str, tmp_path: Pat
     if (group, option) == ("layout", "file"):
         layout = tmp_path / "grid.txt"
         layout.write_text("....\n.@..\n....\n")
-        overrides += [f"layout.path={layout}", "env.num_robots=2", "tasks=random"]
+        overrides += [f"layout.path={layout}", "sim.num_robots=2", "tasks=random"]
     if (group, option) == ("tasks", "file"):
         tasks = tmp_path / "tasks.csv"
         tasks.write_text("ox,oy,dx,dy\n" + "1,1,5,5\n" * 20)
-        overrides += [f"tasks.path={tasks}", "env.num_tasks=20"]
+        overrides += [f"tasks.path={tasks}", "sim.num_tasks=20"]
     if (group, option) == ("tasks", "poc"):
-        overrides += ["env.num_tasks=5", "layout=open"]
+        overrides += ["sim.num_tasks=5", "layout=open"]
     if (group, option) == ("tasks", "stations"):
         overrides += ["layout=A"]
     if (group, option) == ("tasks", "two_task"):
-        overrides += ["env.queue_len=2", "layout=open"]
+        overrides += ["sim.queue_len=2", "layout=open"]
     if option == "lorr":
         problem = _tiny_lorr_problem(tmp_path)
         overrides += {
-            "layout": [f"layout.problem={problem}", "tasks=random", "env.num_robots=2"],
+            "layout": [f"layout.problem={problem}", "tasks=random", "sim.num_robots=2"],
             "tasks": [f"tasks.problem={problem}", "layout=lorr", f"layout.problem={problem}",
-                      "env.num_robots=2", "env.queue_len=3", "env.refill=finish"],
-            "scenario": [f"tasks.problem={problem}", "env.horizon=20"],
+                      "sim.num_robots=2", "sim.queue_len=3", "sim.refill=finish"],
+            "scenario": [f"tasks.problem={problem}", "sim.horizon=20"],
         }[group]  # fmt: skip
     cfg = _compose(overrides)
-    assert cfg[group if group not in GLOBAL_GROUPS else "env"] is not None
+    assert cfg[group if group not in GLOBAL_GROUPS else "sim"] is not None
     sim = build_sim(typed(cfg).sim_spec())
     sim.reset(0)
     assert not sim.done
@@ -86,15 +86,15 @@ def test_poc_golden_through_cli(tmp_path: Path) -> None:
     data = json.loads(out.read_text())
     assert data["policies"]["mpdm"]["ttd"][0] == pytest.approx(22.737, abs=0.01)
     assert data["policies"]["rbts"]["ttd"][0] == pytest.approx(18.463, abs=0.01)
-    assert data["config"]["env"]["num_robots"] == 2
+    assert data["config"]["sim"]["num_robots"] == 2
     assert data["seeds"] == [0]
 
 
 def test_cli_overrides_beat_scenario(tmp_path: Path) -> None:
     """Command-line values override a scenario's values and group choices."""
-    cfg = _compose(["scenario=two_task", "env.num_robots=3", "navigator=astar", "layout.width=12"])
-    assert cfg.env.num_robots == 3
-    assert cfg.env.episode_mode == "paper"
+    cfg = _compose(["scenario=two_task", "sim.num_robots=3", "navigator=astar", "layout.width=12"])
+    assert cfg.sim.num_robots == 3
+    assert cfg.sim.episode_mode == "paper"
     assert cfg.navigator.name == "astar"
     assert (cfg.layout.name, cfg.layout.width, cfg.layout.height) == ("open", 12, 10)
 
@@ -105,8 +105,8 @@ def test_results_json_shape(tmp_path: Path) -> None:
     run(
         _compose(
             [
-                "env.num_tasks=40",
-                "env.num_robots=4",
+                "sim.num_tasks=40",
+                "sim.num_robots=4",
                 "policy=[mpdm,random]",
                 "seeds=[0,1,2]",
                 f"output={out}",
@@ -287,13 +287,13 @@ def _cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["env.num_robots=0"], "env.num_robots must be >= 1"),
-        (["env.queue_len=0"], "env.queue_len must be >= 1"),
+        (["sim.num_robots=0"], "sim.num_robots must be >= 1"),
+        (["sim.queue_len=0"], "sim.queue_len must be >= 1"),
         (["layout.path=missing.map"], "layout file not found"),
         (["policy=[nope]"], "unknown policy 'nope'; available: "),
         (["tasks=file"], "tasks.path"),
         (["tasks=file", "tasks.path=missing.csv"], "task file not found"),
-        (["navigator=sipp", "env.noise_var=0.25"], "set env.noise_mean=0 env.noise_var=0"),
+        (["navigator=sipp", "sim.noise_var=0.25"], "set sim.noise_mean=0 sim.noise_var=0"),
         (["navigator=cbs", "navigator.max_nodes=0"], "navigator.max_nodes must be a positive"),
         (["navigator=sipp", "+navigator.window=5"], "unknown config key 'navigator.window'"),
         (["compare_to=nope"], "compare_to=nope is not an evaluated policy"),
@@ -358,7 +358,7 @@ def test_table1_experiment_composes_with_every_launcher(launcher: str) -> None:
     assert rows.split(",") == list(ROWS)  # experiment/table1.yaml sweeps every registered row
     assert (cfg.layout.preset, cfg.navigator.name) == ("D", "astar")
     assert list(cfg.pretrained) == ["D_astar_m10_long_plus", "D_astar_m10_long"]
-    assert cfg.env.episode_mode == "paper"
+    assert cfg.sim.episode_mode == "paper"
     assert list(cfg.policy) == ["mpdm", "rbts", "lookahead", "hungarian", "hindsight", "pretrained"]
     assert list(cfg.seeds) == list(range(20))
 
@@ -370,10 +370,10 @@ RULES = "policy=[mpdm,rbts,lookahead,hungarian,hindsight]"
     "overrides",
     [
         ["scenario=poc"],
-        ["scenario=two_task", "env.num_tasks=40"],
-        ["scenario=two_task", "env.num_tasks=40", "env.episode_mode=drain"],
+        ["scenario=two_task", "sim.num_tasks=40"],
+        ["scenario=two_task", "sim.num_tasks=40", "sim.episode_mode=drain"],
         *(
-            [f"layout={layout}", "tasks=random", "env.num_tasks=12"]
+            [f"layout={layout}", "tasks=random", "sim.num_tasks=12"]
             for layout in ("open", "shelves", "warehouse", "A", "B", "C", "D", "E")
         ),
         *(
@@ -381,8 +381,8 @@ RULES = "policy=[mpdm,rbts,lookahead,hungarian,hindsight]"
                 f"navigator={nav}",
                 "layout=A",
                 "tasks=random",
-                "env.num_robots=4",
-                "env.num_tasks=12",
+                "sim.num_robots=4",
+                "sim.num_tasks=12",
             ]
             for nav in ("direct", "sipp", "cbs")
         ),
@@ -451,8 +451,8 @@ def test_a_large_seed_range_is_never_parsed_expanded(
     "setting",
     [
         ["scenario=poc"],  # 2 robots, a queue of 2, 10x10
-        ["row=C", "env.num_robots=37", "env.queue_len=7", "env.num_tasks=40"],
-        ["scenario=open300_direct_m1000_random", "env.num_tasks=60"],
+        ["row=C", "sim.num_robots=37", "sim.queue_len=7", "sim.num_tasks=40"],
+        ["scenario=open300_direct_m1000_random", "sim.num_tasks=60"],
     ],
 )
 def test_the_generalist_is_selected_by_name_on_any_scenario(
@@ -474,7 +474,7 @@ def test_candidates_restrict_learned_policies_under_their_own_label(tmp_path: Pa
     ``NAME@kK`` (its own journal entries); it is one clear error when not >= 1."""
     out = tmp_path / "k.json"
     result = cli(
-        "eval", "scenario=poc", "env.queue_len=12", "policy=pretrained",
+        "eval", "scenario=poc", "sim.queue_len=12", "policy=pretrained",
         "pretrained=shelves_astar_m10_plus", "candidates=4", "seeds=[0,1]", "progress=false",
         f"output={out}",
     )  # fmt: skip

@@ -33,7 +33,7 @@ from rtaw_marl.utils.signals import Interrupted
 
 pytestmark = pytest.mark.integration
 
-QUICK = ("env.num_tasks=30", "progress=false")
+QUICK = ("sim.num_tasks=30", "progress=false")
 RTAW_EVAL = Path(sys.executable).with_name("rtaw-eval")
 #: The module (the package's ``evaluate`` attribute is the function).
 evaluate_module = importlib.import_module("rtaw_marl.evaluation.evaluate")
@@ -78,7 +78,7 @@ def test_a_checkpoint_replaced_at_the_same_path_runs_only_its_episodes_again(
 def _layout_case(tmp_path: Path) -> tuple[list[str], Path, bytes]:
     path = tmp_path / "map.txt"
     path.write_text("..........\n" * 10)
-    return [f"layout.path={path}", "env.num_robots=2", "tasks=random"], path, b"@" + b"." * 9
+    return [f"layout.path={path}", "sim.num_robots=2", "tasks=random"], path, b"@" + b"." * 9
 
 
 def _tasks_case(tmp_path: Path) -> tuple[list[str], Path, bytes]:
@@ -210,7 +210,7 @@ def test_sigterm_stops_like_ctrl_c_and_the_run_resumes(tmp_path: Path) -> None:
     """A real SIGTERM (what schedulers send) in the middle of an evaluation: one line,
     exit 143, every finished episode journalled; resume=true replays them."""
     out = tmp_path / "res.json"
-    args = [str(RTAW_EVAL), "env.num_tasks=200", "policy=[mpdm]", "progress=false",
+    args = [str(RTAW_EVAL), "sim.num_tasks=200", "policy=[mpdm]", "progress=false",
             f"output={out}"]  # fmt: skip
     proc = subprocess.Popen(
         [*args, "seeds=${range:0,400}"],
@@ -276,7 +276,7 @@ def test_an_os_error_in_a_sweep_job_fails_that_job_only(
     assert result.code == 2
     errors = [line for line in result.err.splitlines() if line.startswith("error: ")]
     assert errors == [
-        "error: job 1 (env.num_tasks=30 progress=False policy=[mpdm] seeds=[0] navigator=astar): "
+        "error: job 1 (sim.num_tasks=30 progress=False policy=[mpdm] seeds=[0] navigator=astar): "
         f"File "
         f"name too long: /tmp/{'x' * 300}",
         f"error: 1 of 2 jobs failed (their errors are above and in {sweep}/*/FAILED)",
@@ -312,7 +312,7 @@ def test_a_long_evaluation_prints_its_estimated_time_and_the_bar_carries_it(
     monkeypatch.setattr(eval_cli, "progress_shown", lambda requested, stream=None: requested)
     _Recorded.made.clear()
     out = tmp_path / "res.json"
-    args = ["env.num_tasks=30", "policy=[mpdm,rbts]", "seeds=[0,1,2,3,4]", f"output={out}"]
+    args = ["sim.num_tasks=30", "policy=[mpdm,rbts]", "seeds=[0,1,2,3,4]", f"output={out}"]
     result = cli("eval", *args)
     assert result.code == 0, result.err
     # A progress note: on stderr, out of the report (stdout, results.txt).

@@ -46,7 +46,7 @@ def test_eval_help_lists_its_groups_and_no_training_group(cli) -> None:
     assert result.out.startswith("rtaw-eval: evaluate")
     listed = _groups_listed(result.out)
     assert listed == set(app_groups("eval"))
-    assert {"env", "layout", "navigator", "tasks", "scenario", "row"} <= listed
+    assert {"sim", "layout", "navigator", "tasks", "scenario", "row"} <= listed
     # Training groups and Hydra's internal schemas are not offered.
     for foreign in ("algo", "collector", "model", "zoo", "schema"):
         assert f"\n{foreign}" not in result.out
@@ -57,12 +57,12 @@ def test_eval_help_describes_keys_from_the_schemas(cli) -> None:
     """Each key's line: its current value, then the start of its ``Attributes:`` entry."""
     result = cli("eval", "--help")
     sim_docs, eval_docs = attribute_docs(SimConfig), attribute_docs(EvalConfig)
-    assert sim_docs["queue_len"].replace("``", "")[:30] in _key_line(result.out, "env.queue_len=10")
+    assert sim_docs["queue_len"].replace("``", "")[:30] in _key_line(result.out, "sim.queue_len=10")
     assert eval_docs["seeds"][:30] in _key_line(result.out, "seeds=[0,1,2,3,4]")
     assert "baselines.lookahead_horizon=3" in result.out
     # Every top-level key of the schema has a line.
     for field in dataclasses.fields(EvalConfig):
-        if field.name not in ("env", "layout", "navigator", "tasks", "baselines"):
+        if field.name not in ("sim", "layout", "navigator", "tasks", "baselines"):
             assert f"\n  {field.name}=" in result.out, field.name
 
 
@@ -76,7 +76,7 @@ def test_train_help_shows_its_groups_and_the_overrides(cli) -> None:
     assert not listed & {"row", "experiment"}
     assert "*poc" in result.out
     assert "*direct" in result.out
-    assert "env.num_robots=2 " in result.out  # poc's fleet, not the default 10
+    assert "sim.num_robots=2 " in result.out  # poc's fleet, not the default 10
     assert "algo.lr=" in result.out
 
 
@@ -131,8 +131,8 @@ def test_completion_query_offers_only_the_commands_groups(cli, monkeypatch) -> N
 
 
 def test_own_words_keeps_keys_and_hydra() -> None:
-    words = ["+zoo=", "algo=", "schema/", "env.", "hydra/", "~row", "seeds="]
-    assert own_words("eval", words) == ["env.", "hydra/", "~row", "seeds="]
+    words = ["+zoo=", "algo=", "schema/", "sim.", "hydra/", "~row", "seeds="]
+    assert own_words("eval", words) == ["sim.", "hydra/", "~row", "seeds="]
 
 
 def test_console_script_prints_the_completion_script(tmp_path: Path) -> None:

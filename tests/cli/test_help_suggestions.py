@@ -16,9 +16,9 @@ pytestmark = pytest.mark.integration
 @pytest.mark.parametrize(
     ("args", "listing", "suggestion"),
     [
-        (["env.num_robot=5"], "valid keys there: num_robots, num_tasks", "'env.num_robots'"),
+        (["sim.num_robot=5"], "valid keys there: num_robots, num_tasks", "'sim.num_robots'"),
         (["+layout.widht=3"], "valid keys there: path, width, height", "'layout.width'"),
-        (["navigatr=sipp"], "valid keys there: env, layout, navigator", "'navigator'"),
+        (["navigatr=sipp"], "valid keys there: sim, layout, navigator", "'navigator'"),
         (["navigator=sipq"], "available: astar, cbs, direct, pibt, sipp", "'navigator=sipp'"),
         (["row=c"], "available: A, A_m100, B", "'row=C'"),
         (["hydra/launcher=jobilb"], "available: basic, joblib", "'hydra/launcher=joblib'"),

@@ -22,7 +22,7 @@ def test_render_writes_a_checked_gif(navigator: str, tmp_path: Path) -> None:
     """A short episode on layout A with the shipped policy: one frame per second."""
     out = tmp_path / "episode.gif"
     overrides = [
-        f"navigator={navigator}", "layout=A", "env.num_tasks=6", "policy=pretrained",
+        f"navigator={navigator}", "layout=A", "sim.num_tasks=6", "policy=pretrained",
         "pretrained=A_astar_m10", f"output={out}", "every=2",
     ]  # fmt: skip
     cfg = compose(config_name="render", overrides=overrides)
@@ -43,8 +43,8 @@ def test_render_writes_lorr_output(tmp_path: Path) -> None:
 
     problem = _tiny_lorr_problem(tmp_path)
     out = tmp_path / "episode.json"
-    overrides = ["scenario=lorr", f"tasks.problem={problem}", "env.horizon=40",
-                 "env.num_tasks=200", f"output={out}"]  # fmt: skip
+    overrides = ["scenario=lorr", f"tasks.problem={problem}", "sim.horizon=40",
+                 "sim.num_tasks=200", f"output={out}"]  # fmt: skip
     assert run(compose(config_name="render", overrides=overrides)) == out
     replayed = read_replay(out, read_problem(problem).layout())
     assert replayed.positions.shape == (41, 2, 2)
@@ -61,7 +61,7 @@ def test_render_writes_lorr_output(tmp_path: Path) -> None:
     ],
 )
 def test_render_errors_are_one_line(args: list[str], message: str, cli) -> None:
-    result = cli("render", "env.num_tasks=4", *args)
+    result = cli("render", "sim.num_tasks=4", *args)
     assert result.code == 2
     errors = [line for line in result.err.splitlines() if line.startswith("error:")]
     assert len(errors) == 1

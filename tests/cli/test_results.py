@@ -25,14 +25,14 @@ pytestmark = pytest.mark.integration
 
 RTAW_RESULTS = Path(sys.executable).with_name("rtaw-results")
 
-TINY = ["env.num_tasks=20", "policy=[mpdm,rbts]", "seeds=[0,1]", "progress=false"]
+TINY = ["sim.num_tasks=20", "policy=[mpdm,rbts]", "seeds=[0,1]", "progress=false"]
 
 
 @pytest.fixture
 def sweep(cli, tmp_path: Path) -> Path:
     """A two-job rtaw-eval sweep over the fleet size (3 and 5 robots)."""
     folder = tmp_path / "sweep"
-    result = cli("eval", "-m", *TINY, "env.num_robots=3,5", f"hydra.sweep.dir={folder}")
+    result = cli("eval", "-m", *TINY, "sim.num_robots=3,5", f"hydra.sweep.dir={folder}")
     assert result.code == 0, result.err
     return folder
 
@@ -51,14 +51,14 @@ def test_a_sweep_is_combined_into_the_jobs_own_numbers(cli, sweep: Path) -> None
     result = cli("results", str(sweep))
     assert result.code == 0, result.err
     combined = json.loads((sweep / "combined.json").read_text())
-    assert combined["swept"] == ["env.num_robots"]
-    rows = {(r["setting"]["env.num_robots"], r["policy"]): r for r in combined["rows"]}
+    assert combined["swept"] == ["sim.num_robots"]
+    rows = {(r["setting"]["sim.num_robots"], r["policy"]): r for r in combined["rows"]}
     assert set(rows) == {("3", "mpdm"), ("3", "rbts"), ("5", "mpdm"), ("5", "rbts")}
     printed = _table_rows(result.out)
     assert (sweep / "combined.txt").read_text() == result.out.split("combined 2 results")[0]
     for job in ("0", "1"):
         data = json.loads((sweep / job / "results.json").read_text())
-        robots = str(data["config"]["env"]["num_robots"])
+        robots = str(data["config"]["sim"]["num_robots"])
         own = {_cells(ln)[0]: _cells(ln) for ln in (sweep / job / "results.txt").read_text()
                .splitlines() if ln.startswith(("| mpdm", "| rbts"))}  # fmt: skip
         for policy in ("mpdm", "rbts"):
@@ -72,11 +72,11 @@ def test_a_sweep_is_combined_into_the_jobs_own_numbers(cli, sweep: Path) -> None
             assert line[4] == own[policy][5]
     with (sweep / "combined.csv").open() as fh:
         table = list(csv.DictReader(fh))
-    assert [(r["env.num_robots"], r["policy"]) for r in table] == [
+    assert [(r["sim.num_robots"], r["policy"]) for r in table] == [
         ("3", "mpdm"), ("3", "rbts"), ("5", "mpdm"), ("5", "rbts")
     ]  # fmt: skip
     for r in table:
-        row = rows[(r["env.num_robots"], r["policy"])]
+        row = rows[(r["sim.num_robots"], r["policy"])]
         assert float(r["ttd_mean"]) == pytest.approx(sum(row["ttd"]) / 2)
         pct = row["vs"].get("mpdm", {}).get("pct")
         assert r["vs_mpdm_pct"] == ("" if pct is None else str(pct))
@@ -88,7 +88,7 @@ def test_a_sweep_over_policies_merges_into_one_setting(cli, tmp_path: Path, swee
     """Jobs that ran one policy each at the same setting are paired with each other;
     the numbers are those of the job that ran both."""
     folder = tmp_path / "by_policy"
-    args = ["env.num_tasks=20", "env.num_robots=3", "seeds=[0,1]", "progress=false"]
+    args = ["sim.num_tasks=20", "sim.num_robots=3", "seeds=[0,1]", "progress=false"]
     result = cli("eval", "-m", *args, "policy=[mpdm],[rbts]", f"hydra.sweep.dir={folder}")
     assert result.code == 0, result.err
     out = tmp_path / "out"
@@ -137,9 +137,12 @@ def _nested(depth: int) -> dict:
     return inner
 
 
-def _payload(robots: int, seeds: list[int], ttd: dict[str, list[float]]) -> dict:
+def _payload(
+    robots: int, seeds: list[int], ttd: dict[str, list[float]], group: str = "sim"
+) -> dict:
+    """A results file's contents; ``group="env"``: as written before ``sim`` was ``env``."""
     return {
-        "config": {"env": {"num_robots": robots}, "policy": list(ttd), "seeds": seeds},
+        "config": {group: {"num_robots": robots}, "policy": list(ttd), "seeds": seeds},
         "seeds": seeds,
         "policies": {name: {"ttd": values} for name, values in ttd.items()},
     }
@@ -209,9 +212,9 @@ def test_settings_are_named_by_the_overrides_that_differ(cli, tmp_path: Path) ->
     refused with the list of those that did."""
     root = tmp_path / "s"
     _job(root / "0", _payload(3, [0], {"mpdm": [2.0], "rbts": [1.0]}),
-         ["env.num_robots=3", "seeds=[0]", "+policy=[mpdm,rbts]"])  # fmt: skip
+         ["sim.num_robots=3", "seeds=[0]", "+policy=[mpdm,rbts]"])  # fmt: skip
     _job(root / "1", _payload(5, [0], {"mpdm": [4.0], "rbts": [3.0]}),
-         ["env.num_robots=5", "seeds=[0]", "+policy=[mpdm,rbts]"])  # fmt: skip
+         ["sim.num_robots=5", "seeds=[0]", "+policy=[mpdm,rbts]"])  # fmt: skip
     result = cli("results", str(root))
     assert result.code == 0, result.err
     assert _table_rows(result.out)["5 rbts"] == ["5", "rbts", "1", "3.00", "+25.0% [n/a]"]
@@ -226,11 +229,37 @@ def test_settings_are_named_by_the_overrides_that_differ(cli, tmp_path: Path) ->
     assert "evaluated: mpdm, rbts" in result.err
 
 
+@pytest.mark.parametrize("old", [{"0", "1"}, {"0"}], ids=["both-old", "one-old"])
+def test_results_written_before_sim_was_env_still_combine(
+    cli, tmp_path: Path, old: set[str]
+) -> None:
+    """Results files (``config.env``) and overrides (``env.num_robots=3``) written before
+    the simulator's group was renamed ``sim`` are read under today's names: alone or
+    beside new ones they give the numbers and setting names new files give."""
+    tables = {}
+    for spelling in ("new", "mixed"):
+        root = tmp_path / spelling
+        for job, robots, ttd in (("0", 3, [2.0, 1.0]), ("1", 5, [4.0, 3.0])):
+            group = "env" if spelling == "mixed" and job in old else "sim"
+            _job(root / job, _payload(robots, [0], {"mpdm": ttd[:1], "rbts": ttd[1:]}, group),
+                 [f"{group}.num_robots={robots}", "seeds=[0]", "+policy=[mpdm,rbts]"])  # fmt: skip
+        result = cli("results", str(root))
+        assert result.code == 0, result.err
+        combined = json.loads((root / "combined.json").read_text())
+        assert combined["swept"] == ["sim.num_robots"]
+        rows = [{k: v for k, v in r.items() if k != "source"} for r in combined["rows"]]
+        tables[spelling] = (result.out.split("combined 2 results")[0], rows)
+    assert tables["mixed"] == tables["new"]
+    for folder in ("0", "1"):  # read, never rewritten
+        written = json.loads((tmp_path / "mixed" / folder / "results.json").read_text())
+        assert next(iter(written["config"])) == ("env" if folder in old else "sim")
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
         ("5\n", "not a Hydra overrides list (a list of KEY=VALUE strings"),
-        ("- env.num_robots=3\n- {a: 1}\n", "not a Hydra overrides list"),
+        ("- sim.num_robots=3\n- {a: 1}\n", "not a Hydra overrides list"),
         ("- [unclosed\n", "cannot be read ("),
         ("[" * 200_000 + "]" * 200_000, "nested too deeply to be a Hydra overrides list"),
     ],

@@ -23,7 +23,7 @@ from rtaw_marl.utils.runs import LOCK_NAME, check_writable_file, claim_file, cla
 
 pytestmark = pytest.mark.integration
 
-QUICK = ("env.num_tasks=30", "progress=false", "policy=[mpdm,rbts]")
+QUICK = ("sim.num_tasks=30", "progress=false", "policy=[mpdm,rbts]")
 
 
 @pytest.fixture
@@ -184,7 +184,7 @@ def test_unwritable_outputs_of_the_other_clis(cli, tmp_path: Path, app: str, arg
 @pytest.mark.parametrize("launcher", ["basic", "joblib"])
 def test_a_failed_job_does_not_stop_the_sweep(cli, tmp_path: Path, launcher: str) -> None:
     result = cli(
-        "eval", "--multirun", "env.num_robots=0,3", *QUICK, "seeds=[0]",
+        "eval", "--multirun", "sim.num_robots=0,3", *QUICK, "seeds=[0]",
         f"hydra/launcher={launcher}",
     )  # fmt: skip
     assert result.code == 2
@@ -194,8 +194,8 @@ def test_a_failed_job_does_not_stop_the_sweep(cli, tmp_path: Path, launcher: str
     results = list(tmp_path.glob("multirun/**/results.json"))
     assert [p.parent.name for p in results] == ["1"]
     failed = (results[0].parent.parent / "0" / "FAILED").read_text()
-    assert failed.startswith("job 0 (env.num_robots=0 ")
-    assert "env.num_robots must be >= 1" in failed
+    assert failed.startswith("job 0 (sim.num_robots=0 ")
+    assert "sim.num_robots must be >= 1" in failed
     if launcher == "basic":  # joblib's jobs print from other processes, past capsys
         assert lines[0] == f"error: {failed.strip()}"
 
@@ -220,7 +220,7 @@ class _KilledAfter:
 
 
 def test_finished_episodes_survive_a_kill(tmp_path: Path) -> None:
-    sim = build_sim(SimSpec.of(env={"num_tasks": 30}))
+    sim = build_sim(SimSpec.of(sim={"num_tasks": 30}))
     path = tmp_path / "results.episodes.jsonl"
     journal = EpisodeJournal(path, {"a": 1}, resume=False)
     with pytest.raises(KeyboardInterrupt):
@@ -263,7 +263,7 @@ def test_kill_9_keeps_the_finished_episodes(tmp_path: Path) -> None:
     """A real SIGKILL in the middle of an evaluation: the journal keeps every finished
     episode, and resume=true completes the run from there."""
     out = tmp_path / "res.json"
-    args = [str(Path(sys.executable).with_name("rtaw-eval")), "env.num_tasks=200",
+    args = [str(Path(sys.executable).with_name("rtaw-eval")), "sim.num_tasks=200",
             "policy=[mpdm]", "seeds=${range:0,400}", "progress=false", f"output={out}"]  # fmt: skip
     proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     journal = journal_path(out)
@@ -294,9 +294,30 @@ def test_kill_9_keeps_the_finished_episodes(tmp_path: Path) -> None:
 def test_resume_refuses_another_setting(cli, tmp_path: Path) -> None:
     out = tmp_path / "res.json"
     assert cli("eval", *QUICK, "seeds=[0]", f"output={out}").code == 0
-    result = cli("eval", *QUICK, "seeds=[0]", f"output={out}", "resume=true", "env.num_robots=7")
+    result = cli("eval", *QUICK, "seeds=[0]", f"output={out}", "resume=true", "sim.num_robots=7")
     assert result.code == 2
-    assert "holds episodes of another setting (differs in env.num_robots: 10 -> 7)" in result.err
+    assert "holds episodes of another setting (differs in sim.num_robots: 10 -> 7)" in result.err
+
+
+def test_resume_continues_a_journal_written_before_sim_was_env(cli, tmp_path: Path) -> None:
+    """A journal whose setting says ``env`` (written before the simulator's group was
+    renamed ``sim``) is the same setting: its episodes are replayed, and a changed key is
+    named ``sim.*``."""
+    out = tmp_path / "res.json"
+    assert cli("eval", *QUICK, "seeds=[0,1]", f"output={out}").code == 0
+    journal = journal_path(out)
+    header, *episodes = journal.read_text().splitlines()
+    old = json.loads(header)
+    old["setting"] = {("env" if k == "sim" else k): v for k, v in old["setting"].items()}
+    journal.write_text("\n".join([json.dumps(old), *episodes]) + "\n")
+    result = cli("eval", *QUICK, "seeds=[0,1,2]", f"output={out}", "resume=true")
+    assert result.code == 0, result.err
+    assert "resume: 4 finished episodes" in result.out
+    assert len(json.loads(out.read_text())["policies"]["mpdm"]["ttd"]) == 3
+    journal.write_text("\n".join([json.dumps(old), *episodes]) + "\n")
+    result = cli("eval", *QUICK, "seeds=[0]", f"output={out}", "resume=true", "sim.num_robots=7")
+    assert result.code == 2
+    assert "holds episodes of another setting (differs in sim.num_robots: 10 -> 7)" in result.err
 
 
 def test_without_resume_the_journal_starts_afresh(cli, tmp_path: Path) -> None:

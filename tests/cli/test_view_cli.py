@@ -42,7 +42,7 @@ def _positions(ep: dict) -> np.ndarray:
 
 def test_two_policies_side_by_side(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "v.html"
-    overrides = ["layout=A", "env.num_tasks=6", "policy=[mpdm,pretrained]",
+    overrides = ["layout=A", "sim.num_tasks=6", "policy=[mpdm,pretrained]",
                  "pretrained=A_astar_m10", f"output={out}"]  # fmt: skip
     assert run(compose(config_name="view", overrides=overrides)) == out
     captured = capsys.readouterr()
@@ -58,9 +58,9 @@ def test_saved_lorr_output_is_shown(tmp_path: Path) -> None:
     """rtaw-render output=*.json, then rtaw-view schedule=: the same robot positions."""
     problem = _tiny_lorr_problem(tmp_path)
     saved = tmp_path / "episode.json"
-    scenario = ["scenario=lorr", f"tasks.problem={problem}", "env.horizon=40"]
+    scenario = ["scenario=lorr", f"tasks.problem={problem}", "sim.horizon=40"]
     render(
-        compose(config_name="render", overrides=[*scenario, "env.num_tasks=200", f"output={saved}"])
+        compose(config_name="render", overrides=[*scenario, "sim.num_tasks=200", f"output={saved}"])
     )
     out = tmp_path / "v.html"
     run(compose(config_name="view", overrides=[*scenario, f"schedule={saved}", f"output={out}"]))
@@ -79,8 +79,8 @@ def test_a_lorr_scenario_keeps_its_task_count(app: str, tmp_path: Path) -> None:
     """The apps' short default (50 tasks) does not cut a horizon episode's task count."""
     problem = _tiny_lorr_problem(tmp_path)
     cfg = compose(config_name=app, overrides=["scenario=lorr", f"tasks.problem={problem}"])
-    assert cfg.env.num_tasks != 50
-    assert compose(config_name=app, overrides=[]).env.num_tasks == 50
+    assert cfg.sim.num_tasks != 50
+    assert compose(config_name=app, overrides=[]).sim.num_tasks == 50
 
 
 @pytest.mark.parametrize(
@@ -94,7 +94,7 @@ def test_a_lorr_scenario_keeps_its_task_count(app: str, tmp_path: Path) -> None:
     ],
 )
 def test_view_errors_are_one_line(args: list[str], message: str, cli) -> None:
-    result = cli("view", "env.num_tasks=4", *args)
+    result = cli("view", "sim.num_tasks=4", *args)
     assert result.code == 2
     assert message in result.err
     assert len(result.err.strip().splitlines()) == 1

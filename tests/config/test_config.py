@@ -17,7 +17,7 @@ from rtaw_marl.sim import builder
 
 pytestmark = pytest.mark.integration
 
-GROUP_DIRS = ("env", "layout", "navigator", "tasks", "model", "algo", "collector")
+GROUP_DIRS = ("sim", "layout", "navigator", "tasks", "model", "algo", "collector")
 
 
 def _twins() -> list[tuple[str, str]]:
@@ -46,7 +46,7 @@ def test_yaml_twin_is_its_schema_plus_what_it_sets(group: str, option: str) -> N
         overrides.append(f"{group}.path=some/file")
     typed = getattr(to_typed(compose("train", overrides)), group)
     assert type(typed) is schema
-    own = {k: v for k, v in text.items() if k not in ("defaults", "env")}
+    own = {k: v for k, v in text.items() if k not in ("defaults", "sim")}
     required = {
         f.name: own.get(f.name, "some/file")
         for f in dataclasses.fields(schema)
@@ -58,7 +58,7 @@ def test_yaml_twin_is_its_schema_plus_what_it_sets(group: str, option: str) -> N
         assert getattr(typed, field.name) == expected, field.name
     written = yaml.safe_load((CONF_DIR / group / f"{option}.yaml").read_text())
     for key, value in written.items():
-        if key not in ("defaults", "env", *required):
+        if key not in ("defaults", "sim", *required):
             before = inherited.get(key, getattr(defaults, key))
             assert value != before, f"{key} repeats what the option would have anyway"
 
@@ -72,7 +72,7 @@ def test_every_app_composes_to_its_dataclass(app: str) -> None:
 @pytest.mark.parametrize(
     "key",
     [
-        "env.num_robot",
+        "sim.num_robot",
         "layout.widht",
         "navigator.time_limit",  # astar has no time limit
         "tasks.sigmaa",
@@ -97,16 +97,16 @@ def test_unknown_key_in_any_group_is_one_line_exit_2(key: str, cli, tmp_path: Pa
 
 @pytest.mark.parametrize("app", ["eval", "render"])
 def test_unknown_key_in_eval_and_render(app: str, cli) -> None:
-    result = cli(app, "+env.bogus=3")
+    result = cli(app, "+sim.bogus=3")
     assert result.code == 2
-    assert result.err.startswith("error: unknown config key 'env.bogus'; valid keys there: num_")
+    assert result.err.startswith("error: unknown config key 'sim.bogus'; valid keys there: num_")
 
 
 def test_wrong_type_is_one_line(cli) -> None:
-    result = cli("eval", "env.num_robots=many")
+    result = cli("eval", "sim.num_robots=many")
     assert result.code == 2
     assert result.err.strip() == (
-        "error: config key 'env.num_robots': Value 'many' of type 'str' could not be "
+        "error: config key 'sim.num_robots': Value 'many' of type 'str' could not be "
         "converted to Integer"
     )
 
@@ -133,7 +133,7 @@ def test_the_override_check_parses_only_boolean_keys(monkeypatch: pytest.MonkeyP
     cfg = compose("eval", ["scenario=poc", "seeds=[0,1]"])
     seeds = f"seeds={list(range(100_000))}"
     parsed.clear()  # Hydra's own parse of the composition's overrides
-    check_overrides(cfg, [seeds, "scenario=poc", "env.num_robots=3", "progress=true"])
+    check_overrides(cfg, [seeds, "scenario=poc", "sim.num_robots=3", "progress=true"])
     assert parsed == [["progress=true"]]
     with pytest.raises(ConfigError, match=r"^lower_bound must be true or false, got 'off'$"):
         check_overrides(cfg, [seeds, "+lower_bound=off"])
@@ -159,9 +159,9 @@ PARAMS = [
     "tasks=clustered",
     "tasks.num_clusters=3",
     "tasks.sigma=2.5",
-    "env.num_robots=3",
-    "env.num_tasks=8",
-    "env.queue_len=3",
+    "sim.num_robots=3",
+    "sim.num_tasks=8",
+    "sim.queue_len=3",
 ]
 
 
@@ -189,7 +189,7 @@ def _assert_params_reached(specs: list[builder.SimSpec]) -> None:
         assert (layout.highway_every, layout.highway_width, layout.station_spacing) == (2, 3, 3)
         assert (nav.name, nav.time_limit, nav.max_nodes) == ("cbs", 1.5, 7)
         assert (tasks.name, tasks.num_clusters, tasks.sigma) == ("clustered", 3, 2.5)
-        assert (spec.env.num_robots, spec.env.num_tasks, spec.env.queue_len) == (3, 8, 3)
+        assert (spec.sim.num_robots, spec.sim.num_tasks, spec.sim.queue_len) == (3, 8, 3)
         executor = spec.navigator.executor()
         assert (executor.time_limit, executor.max_nodes) == (1.5, 7)
 
@@ -228,7 +228,7 @@ def test_user_config_folder_adds_options(cli, tmp_path: Path) -> None:
     )
     result = cli(
         "eval", f"hydra.searchpath=[file://{conf.parent}]", "layout=tiny", "tasks=random",
-        "env.num_robots=2", "env.num_tasks=6", "policy=[mpdm]", "seeds=[0]", "progress=false",
+        "sim.num_robots=2", "sim.num_tasks=6", "policy=[mpdm]", "seeds=[0]", "progress=false",
     )  # fmt: skip
     assert result.code == 0, result.err
     assert "open_7x5" in result.out
@@ -243,17 +243,17 @@ def test_user_config_folder_adds_options(cli, tmp_path: Path) -> None:
 @pytest.mark.parametrize("name", ["sipp", "cbs", "pibt"])
 def test_a_navigator_sets_the_simulator_keys_its_option_names(name: str) -> None:
     """``navigator=sipp`` (a stored node, no YAML) sets exactly the option's
-    ``env_defaults``, which ``SimSpec.of(navigator=...)`` applies too; a key the user
+    ``sim_defaults``, which ``SimSpec.of(navigator=...)`` applies too; a key the user
     gives still wins."""
     from rtaw_marl.config import compose
     from rtaw_marl.sim.builder import SimSpec
     from rtaw_marl.sim.options import NAVIGATORS
 
-    defaults = dict(NAVIGATORS[name].env_defaults)
+    defaults = dict(NAVIGATORS[name].sim_defaults)
     assert defaults == {"noise_mean": 0.0, "noise_var": 0.0}
     cfg = compose(config_name="eval", overrides=[f"navigator={name}"])
-    assert {k: cfg.env[k] for k in defaults} == defaults
+    assert {k: cfg.sim[k] for k in defaults} == defaults
     spec = SimSpec.of(navigator=name)
-    assert {k: getattr(spec.env, k) for k in defaults} == defaults
-    given = compose(config_name="eval", overrides=[f"navigator={name}", "env.noise_mean=3.0"])
-    assert given.env.noise_mean == 3.0
+    assert {k: getattr(spec.sim, k) for k in defaults} == defaults
+    given = compose(config_name="eval", overrides=[f"navigator={name}", "sim.noise_mean=3.0"])
+    assert given.sim.noise_mean == 3.0

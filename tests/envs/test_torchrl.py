@@ -19,9 +19,9 @@ pytestmark = pytest.mark.unit
 SMALL = {"num_robots": 4, "num_tasks": 12, "queue_len": 3}
 
 
-def _env(num_envs: int = 3, seed: int = 0, **env) -> BatchedWarehouseEnv:
+def _env(num_envs: int = 3, seed: int = 0, **sim) -> BatchedWarehouseEnv:
     return BatchedWarehouseEnv(
-        SimSpec.of({**SMALL, **env}, {"name": "open", "width": 12, "height": 9}, "astar", "random"),
+        SimSpec.of({**SMALL, **sim}, {"name": "open", "width": 12, "height": 9}, "astar", "random"),
         num_envs=num_envs,
         seed=seed,
     )

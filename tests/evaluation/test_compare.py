@@ -17,7 +17,7 @@ from rtaw_marl.sim.builder import SimSpec, build_sim
 
 pytestmark = pytest.mark.unit
 
-SMALL = SCENARIOS["C_astar_m10"].with_env(num_tasks=30)
+SMALL = SCENARIOS["C_astar_m10"].with_sim(num_tasks=30)
 
 
 def first_queued(sim) -> int:
@@ -50,7 +50,7 @@ def test_a_function_is_compared_with_the_rules_on_the_same_seeds() -> None:
 
 
 def test_a_policy_object_and_a_spec_work_too(tmp_path: Path) -> None:
-    spec = SimSpec.of(layout="C", navigator="astar", env={"num_robots": 4, "num_tasks": 12})
+    spec = SimSpec.of(layout="C", navigator="astar", sim={"num_robots": 4, "num_tasks": 12})
     result = compare(MPDM(), spec, seeds=[3, 4], against=["mpdm"], label="my_mpdm")
     # The same rule twice: identical episodes, a difference of exactly 0.
     assert result.results["my_mpdm"]["ttd"] == result.results["mpdm"]["ttd"]

@@ -22,7 +22,7 @@ from rtaw_marl.policies import make_baseline
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.tasks import FixedTasks
-from tests.training.conftest import POC_ENV, POC_LAYOUT
+from tests.training.conftest import POC_LAYOUT, POC_SIM
 
 pytestmark = pytest.mark.unit
 
@@ -55,7 +55,7 @@ def test_bound_is_below_every_policy(layout, navigator: str, tasks: str, robots:
 def test_bound_below_poc_optimum() -> None:
     sim = build_sim(
         SimSpec.of(
-            POC_ENV,
+            POC_SIM,
             POC_LAYOUT,
             "direct",
             "poc",
@@ -212,7 +212,7 @@ def test_rtaw_eval_reports_bound_and_gaps(tmp_path: Path) -> None:
     cfg = compose(
         config_name="eval",
         overrides=[
-            "env.num_tasks=60",
+            "sim.num_tasks=60",
             "policy=[mpdm,rbts]",
             "seeds=[0,1]",
             f"output={out}",

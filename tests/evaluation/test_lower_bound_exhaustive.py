@@ -107,7 +107,7 @@ def instance(index: int, navigator: str, noise: str) -> tuple[WarehouseSim, int]
     robots = int(rng.integers(1, min(3, free - 1) + 1))
     tasks = int(rng.integers(2, 6))
     mean, var = NOISE[noise]
-    env: dict[str, Any] = {
+    keys: dict[str, Any] = {
         "num_robots": robots,
         "num_tasks": tasks,
         "queue_len": int(rng.integers(1, 4)),
@@ -117,11 +117,11 @@ def instance(index: int, navigator: str, noise: str) -> tuple[WarehouseSim, int]
     }
     if rng.random() < 0.25:
         # Robots first free at different (whole-second) times: no id order to rely on.
-        env["robot_free_times"] = rng.integers(0, 4, size=robots).astype(float).tolist()
+        keys["robot_free_times"] = rng.integers(0, 4, size=robots).astype(float).tolist()
     # CBS's default budget (200 high-level nodes a call) spends seconds proving tiny
     # deadlocks; past 20 the new robot plans alone around the others, still collision-free.
     nav = {"name": "cbs", "max_nodes": 20} if navigator == "cbs" else navigator
-    spec = SimSpec.of(env, layout, nav, tiny_tasks(rng, layout, tasks))
+    spec = SimSpec.of(keys, layout, nav, tiny_tasks(rng, layout, tasks))
     return build_sim(spec), int(rng.integers(2**31))
 
 

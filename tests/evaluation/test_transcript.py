@@ -14,7 +14,7 @@ from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcri
 
 pytestmark = pytest.mark.integration
 
-TINY = ["env.num_tasks=20", "env.num_robots=3", "policy=[mpdm,rbts]", "seeds=[0,1]"]
+TINY = ["sim.num_tasks=20", "sim.num_robots=3", "policy=[mpdm,rbts]", "seeds=[0,1]"]
 
 
 class _Terminal(io.StringIO):

@@ -71,7 +71,7 @@ def test_a_damaged_problem_is_refused_as_rtaw_eval_refuses_it(tmp_path: Path) ->
     one_line_error(lorr(f"problem={problem}", f"hydra.run.dir={tmp_path / 'r'}"), message)
     done = subprocess.run(
         [sys.executable, "-m", "rtaw_marl.cli.eval", "scenario=lorr", f"tasks.problem={problem}",
-         "env.horizon=20", "policy=mpdm", "seeds=[0]", f"hydra.run.dir={tmp_path / 'e'}"],
+         "sim.horizon=20", "policy=mpdm", "seeds=[0]", f"hydra.run.dir={tmp_path / 'e'}"],
         capture_output=True, text=True,
     )  # fmt: skip
     assert done.returncode == 2

@@ -181,7 +181,7 @@ def test_bad_checkpoints_through_the_cli(cli, tmp_path: Path, case: str, message
     else:
         path.write_bytes(b"PK\x03\x04 not a checkpoint")
     result = cli("eval", "policy=[mpdm,checkpoint]", f"checkpoint={path}", "seeds=[0]",
-                 "env.num_tasks=20", "progress=false")  # fmt: skip
+                 "sim.num_tasks=20", "progress=false")  # fmt: skip
     assert result.code == 2
     assert message in result.err
     assert len(result.err.strip().splitlines()) == 1

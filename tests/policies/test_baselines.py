@@ -59,9 +59,9 @@ def two_task_sim(num_tasks: int = 500) -> WarehouseSim:
     )
 
 
-def random_sim(navigator: str, layout: dict[str, Any], **env: Any) -> WarehouseSim:
+def random_sim(navigator: str, layout: dict[str, Any], **sim: Any) -> WarehouseSim:
     values: dict[str, Any] = {"num_robots": 4, "num_tasks": 60, "queue_len": 5}
-    values.update(env)
+    values.update(sim)
     return build_sim(SimSpec.of(values, layout, navigator, "random"))
 
 

@@ -90,7 +90,7 @@ def test_lookahead_on_k_candidates_is_lookahead_on_that_sub_queue() -> None:
     from rtaw_marl.scenarios import SCENARIOS
     from rtaw_marl.sim.builder import build_sim
 
-    sim = build_sim(SCENARIOS["C_astar_m10"].with_env(queue_len=20, num_tasks=60).spec())
+    sim = build_sim(SCENARIOS["C_astar_m10"].with_sim(queue_len=20, num_tasks=60).spec())
     full = make_baseline("lookahead")
     wide = make_baseline("lookahead", params=BaselinesConfig(lookahead_candidates=20))
     narrow = make_baseline("lookahead", params=BaselinesConfig(lookahead_candidates=5))

@@ -62,7 +62,7 @@ def test_an_import_spec_plays_like_the_rule_it_wraps(
     )
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.delitem(sys.modules, "spec_rules", raising=False)
-    sim = build_sim(SCENARIOS["C_astar_m10"].with_env(num_tasks=20).spec())
+    sim = build_sim(SCENARIOS["C_astar_m10"].with_sim(num_tasks=20).spec())
     mine = PolicySpec("import", "spec_rules:Mine").build(sim)
     mpdm = PolicySpec.rule("mpdm").build(sim)
     ttd = evaluate(sim, {"mine": mine, "mpdm": mpdm}, [0, 1])

@@ -185,8 +185,8 @@ def test_hindsight_and_lookahead_beat_mpdm_on_the_default_scenario() -> None:
 
 def test_hindsight_with_collision_aware_execution() -> None:
     """With SIPP the rollout uses A* distances without waits; episodes still validate."""
-    env = {"num_robots": 5, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 0.0}
-    sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": "A", "width": 30, "height": 30},
+    keys = {"num_robots": 5, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 0.0}
+    sim = build_sim(SimSpec.of(keys, {"name": "preset", "preset": "A", "width": 30, "height": 30},
                      "sipp", "random"))  # fmt: skip
     res = evaluate(sim, {"hindsight": Hindsight(5), "mpdm": MPDM()}, [0])
     assert res["hindsight"]["tasks_served"] == [20]

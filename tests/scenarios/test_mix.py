@@ -15,8 +15,8 @@ pytestmark = pytest.mark.unit
 def test_member_keys_change_the_scenario() -> None:
     base = SCENARIOS["C_astar_m10"].spec()
     spec = member_spec("C_astar_m10:m30:n5:t40:paper")
-    assert (spec.env.num_robots, spec.env.queue_len, spec.env.num_tasks) == (30, 5, 40)
-    assert spec.env.episode_mode == "paper"
+    assert (spec.sim.num_robots, spec.sim.queue_len, spec.sim.num_tasks) == (30, 5, 40)
+    assert spec.sim.episode_mode == "paper"
     assert (spec.layout, spec.navigator, spec.tasks) == (base.layout, base.navigator, base.tasks)
     assert member_spec("C_astar_m10") == base
 
@@ -27,7 +27,7 @@ def test_member_keys_change_the_scenario() -> None:
         ("C_astar_m7", "unknown scenario 'C_astar_m7'"),
         ("C_astar_m10:x3", "'x3' is not m<robots>, n<queue slots>, t<tasks>, paper or drain"),
         ("C_astar_m10:m", "'m' is not m<robots>"),
-        ("C_astar_m10:m0", "env.num_robots must be"),
+        ("C_astar_m10:m0", "sim.num_robots must be"),
     ],
 )
 def test_bad_members_are_one_clear_error(member: str, message: str) -> None:
@@ -42,11 +42,11 @@ def test_a_member_twice_is_an_error() -> None:
 
 def test_generalist_mix_spans_fleets_maps_and_queues_and_holds_out_the_tests() -> None:
     specs = mix_specs(GENERALIST)
-    robots = {s.env.num_robots for s in specs}
+    robots = {s.sim.num_robots for s in specs}
     assert min(robots) <= 5
     assert max(robots) >= 1000
-    assert {s.env.queue_len for s in specs} == {5, 10}
-    assert {s.env.episode_mode for s in specs} == {"paper", "drain"}
+    assert {s.sim.queue_len for s in specs} == {5, 10}
+    assert {s.sim.episode_mode for s in specs} == {"paper", "drain"}
     # The robot counts the generalist is evaluated on as unseen are not trained on.
     assert not robots & {30, 150, 300, 2000, 10_000}
     layouts = {str(s.layout) for s in specs}

@@ -44,7 +44,7 @@ def test_a_scenario_node_chooses_its_options_and_sets_its_keys() -> None:
             {"override /navigator": "astar"},
             {"override /tasks": "random"},
         ],
-        "env": {"num_robots": 1000, "num_tasks": 5000, "episode_mode": "paper"},
+        "sim": {"num_robots": 1000, "num_tasks": 5000, "episode_mode": "paper"},
         "layout": {"width": 256, "height": 256},
     }
     assert row_node("A_m100") == {
@@ -98,7 +98,7 @@ def test_navigator_names_mean_the_same_in_python(option: str) -> None:
     assert SimSpec.of(navigator=option) == hydra
     # A key given explicitly wins over the navigator's defaults, as on the command line.
     given = to_typed(
-        compose(config_name="eval", overrides=[f"navigator={option}", "env.noise_mean=0.5"])
+        compose(config_name="eval", overrides=[f"navigator={option}", "sim.noise_mean=0.5"])
     ).sim_spec()
     assert SimSpec.of({"noise_mean": 0.5}, navigator=option) == given
 
@@ -110,12 +110,12 @@ def test_unknown_names_list_the_valid_ones() -> None:
         SimSpec.of(layout="Z")
 
 
-def test_with_env_changes_only_what_it_is_given() -> None:
+def test_with_sim_changes_only_what_it_is_given() -> None:
     base = SCENARIOS["C_astar_m10"]
-    paper = base.with_env(episode_mode="paper")
-    assert paper.spec().env.episode_mode == "paper"
-    assert paper.spec().env.num_robots == 10
-    assert base.spec().env.episode_mode == "drain"
+    paper = base.with_sim(episode_mode="paper")
+    assert paper.spec().sim.episode_mode == "paper"
+    assert paper.spec().sim.num_robots == 10
+    assert base.spec().sim.episode_mode == "drain"
 
 
 @pytest.mark.parametrize("name", ["C_astar_m10", "poc", "open300_direct_m100_random"])
@@ -123,7 +123,7 @@ def test_the_env_takes_a_scenario_name(name: str) -> None:
     from rtaw_marl import warehouse_v1
 
     env = warehouse_v1.env(scenario=name)
-    assert env.unwrapped.sim.config == SCENARIOS[name].spec().env
+    assert env.unwrapped.sim.config == SCENARIOS[name].spec().sim
     assert (
         env.unwrapped.sim.layout.describe() == build_sim(SCENARIOS[name].spec()).layout.describe()
     )

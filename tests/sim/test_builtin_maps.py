@@ -215,7 +215,7 @@ def test_env_runs_an_episode_on_a_builtin_layout() -> None:
 def test_rtaw_eval_runs_on_a_builtin_layout(cli, tmp_path: Path) -> None:
     out = tmp_path / "r.json"
     result = cli("eval", "layout.path=builtin:usc_64.cfg", "policy=mpdm", "seeds=[0,1]",
-                 "env.num_tasks=20", "progress=false", f"output={out}")  # fmt: skip
+                 "sim.num_tasks=20", "progress=false", f"output={out}")  # fmt: skip
     assert result.code == 0, result.err
     assert "layout usc_64: 64x64, 3536 free cells" in result.out
     data = json.loads(out.read_text())
@@ -280,12 +280,12 @@ def test_rtaw_eval_runs_a_builtin_lorr_problem(cli, tmp_path: Path) -> None:
     """``scenario=lorr tasks.problem=builtin:...``: the Hydra resolvers that derive the
     robots and the window read the shipped problem too."""
     out = tmp_path / "l.json"
-    result = cli("eval", "scenario=lorr", f"tasks.problem=builtin:{PROBLEM}", "env.horizon=20",
-                 "env.num_robots=10", "policy=mpdm", "seeds=[0]", "progress=false",
+    result = cli("eval", "scenario=lorr", f"tasks.problem=builtin:{PROBLEM}", "sim.horizon=20",
+                 "sim.num_robots=10", "policy=mpdm", "seeds=[0]", "progress=false",
                  f"output={out}")  # fmt: skip
     assert result.code == 0, result.err
     assert "layout random-32-32-20: 32x32, 819 free cells" in result.out
-    assert json.loads(out.read_text())["config"]["env"]["queue_len"] == 15
+    assert json.loads(out.read_text())["config"]["sim"]["queue_len"] == 15
 
 
 @pytest.mark.integration  # a CLI run (Hydra composition)

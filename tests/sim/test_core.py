@@ -281,14 +281,14 @@ def test_sim_config_validation(kwargs: dict[str, object], match: str) -> None:
 
 
 def test_sim_construction_errors() -> None:
-    """Mismatched distance model, too many robots, unknown env keys and blocked starts are
+    """Mismatched distance model, too many robots, unknown simulator keys and blocked starts are
     errors."""
     layout = open_grid(3, 3)
     with pytest.raises(ConfigError, match="different layout"):
         WarehouseSim(SimConfig(), layout, EuclideanDistance(open_grid(3, 3)), RandomTasks())
     with pytest.raises(ConfigError, match="num_robots=10 exceeds the 9 free cells"):
         WarehouseSim(SimConfig(), layout, EuclideanDistance(layout), RandomTasks())
-    with pytest.raises(ConfigError, match=r"unknown key env\.robots; valid keys: num_robots"):
+    with pytest.raises(ConfigError, match=r"unknown key sim\.robots; valid keys: num_robots"):
         build_sim(SimSpec.of({"robots": 3}, "open", "direct", "random"))
     grid = np.zeros((4, 4), dtype=bool)
     grid[1, 1] = True

@@ -51,7 +51,7 @@ def play_mpdm(sim: WarehouseSim, seed: int) -> tuple[list[str], str]:
 
 
 @pytest.mark.parametrize(
-    ("navigator", "env", "layout", "seed", "metrics", "trace"),
+    ("navigator", "keys", "layout", "seed", "metrics", "trace"),
     [
         ("direct", {"num_robots": 10, "num_tasks": 60}, "shelves", 0,
          ["723.2163151484366", "293.4707342591764", "35.843477805887105"], "337bd632e8092c32"),
@@ -64,9 +64,9 @@ def play_mpdm(sim: WarehouseSim, seed: int) -> tuple[list[str], str]:
     ],
 )  # fmt: skip
 def test_episodes_match_the_recorded_simulator(
-    navigator: str, env: dict, layout: object, seed: int, metrics: list[str], trace: str
+    navigator: str, keys: dict, layout: object, seed: int, metrics: list[str], trace: str
 ) -> None:
-    sim = build_sim(SimSpec.of(env, layout, navigator, "designated"))
+    sim = build_sim(SimSpec.of(keys, layout, navigator, "designated"))
     assert play_mpdm(sim, seed) == (metrics, trace)
 
 
@@ -110,8 +110,8 @@ def test_instant_travel_is_the_default() -> None:
 def test_instant_travel_noise_never_finishes_before_the_decision() -> None:
     """A noise draw below minus the travel time is clipped at the decision time (the mean
     must be >= 0, but single draws of a wide noise still fall that low)."""
-    env = {"num_robots": 3, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 10_000.0}
-    sim = build_sim(SimSpec.of(env, {"name": "open", "width": 8, "height": 8}, "direct", "random"))
+    keys = {"num_robots": 3, "num_tasks": 20, "noise_mean": 0.0, "noise_var": 10_000.0}
+    sim = build_sim(SimSpec.of(keys, {"name": "open", "width": 8, "height": 8}, "direct", "random"))
     sim.reset(0)
     while not sim.done:
         sim.step(int(np.flatnonzero(sim.queue_mask)[0]))

@@ -84,7 +84,7 @@ def test_missing_key_and_not_json(tmp_path: Path) -> None:
 def test_more_robots_than_the_agent_file_need_random_starts(tmp_path: Path) -> None:
     path = write_problem(tmp_path, "2\n1,7\n4,0\n")
     sim = build_sim(lorr_scenario(path, num_robots=3, horizon=20).spec())
-    with pytest.raises(ConfigError, match=r"holds 2 start cells, env\.num_robots=3; use tasks"):
+    with pytest.raises(ConfigError, match=r"holds 2 start cells, sim\.num_robots=3; use tasks"):
         sim.reset(0)
     sim = build_sim(lorr_scenario(path, num_robots=3, starts="random", horizon=20).spec())
     sim.reset(0)
@@ -102,8 +102,8 @@ def test_start_kit_problem_runs_collision_free_with_the_window(kit: Path) -> Non
     """The start kit's random 32x32 problem (100 robots): its starts, a window of 150
     revealed tasks, PIBT without conflicts, tasks finished by the horizon counted."""
     s = lorr_scenario(kit, horizon=300)
-    assert (s.env["num_robots"], s.env["queue_len"], s.env["horizon"]) == (100, 150, 300)
-    assert lorr_scenario(kit).env["horizon"] == LORR_HORIZON
+    assert (s.sim["num_robots"], s.sim["queue_len"], s.sim["horizon"]) == (100, 150, 300)
+    assert lorr_scenario(kit).sim["horizon"] == LORR_HORIZON
     sim = build_sim(s.spec())
     problem = read_problem(kit)
     run_episode(sim, make_baseline("mpdm"), seed=0)
@@ -138,13 +138,15 @@ def test_priority_rotation_breaks_the_standoffs_of_fixed_priorities(kit: Path) -
     assert sim.executor.stats()["rotations"] > 0
 
 
-def test_throughput_table_reads_eval_results() -> None:
+@pytest.mark.parametrize("group", ["sim", "env"], ids=["today", "before-sim-was-env"])
+def test_throughput_table_reads_eval_results(group: str) -> None:
     """rtaw-eval's results of horizon episodes become the docs' table, with LoRR's
-    published figures beside warehouse_large at 5,000 robots."""
+    published figures beside warehouse_large at 5,000 robots (results written before
+    the simulator's keys were ``sim`` hold them as ``env``: the same table)."""
     from rtaw_marl.evaluation.throughput import throughput_markdown
 
     payload = {
-        "config": {"env": {"num_robots": 5000, "horizon": 3600}},
+        "config": {group: {"num_robots": 5000, "horizon": 3600}},
         "policies": {
             "mpdm": {"tasks_finished": [100.0, 110.0], "wall_time_s": [36.0, 36.0]},
             "batch": {"tasks_finished": [110.0, 121.0], "wall_time_s": [72.0, 72.0]},
@@ -190,7 +192,7 @@ def test_eval_journal_digests_the_problem_and_its_files(tmp_path: Path) -> None:
 
 
 def test_state_round_trip_keeps_the_owed_refills(tmp_path: Path) -> None:
-    """With env.refill=finish a freed robot's refill is owed until its next decision:
+    """With sim.refill=finish a freed robot's refill is owed until its next decision:
     a simulator that loads a mid-episode state plays the same rest of the episode."""
     path = write_problem(tmp_path, "4\n1,7\n4,0\n3,5\n7,1\n")
     spec = lorr_scenario(path, navigator="astar", horizon=40).spec()

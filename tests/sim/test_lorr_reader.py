@@ -127,8 +127,8 @@ def test_a_task_whose_pickup_is_its_delivery_takes_a_timestep(
 
 def test_a_bad_horizon_is_named(tmp_path: Path) -> None:
     path = problem(tmp_path / "p")
-    with pytest.raises(ConfigError, match=r"env\.horizon must be >= 1, got -5"):
+    with pytest.raises(ConfigError, match=r"sim\.horizon must be >= 1, got -5"):
         lorr_scenario(path, horizon=-5)
-    with pytest.raises(ConfigError, match=r"env\.num_robots must be >= 1, got 0"):
+    with pytest.raises(ConfigError, match=r"sim\.num_robots must be >= 1, got 0"):
         lorr_scenario(path, num_robots=0)
     assert np.isfinite(read_problem(path).mean_task_length())

@@ -9,7 +9,7 @@ from rtaw_marl.scenarios import SCENARIOS
 from rtaw_marl.training.config import TrainConfig
 
 #: The paper's proof-of-concept simulator settings (appendix), from its scenario.
-POC_ENV = dict(SCENARIOS["poc"].env)
+POC_SIM = dict(SCENARIOS["poc"].sim)
 POC_LAYOUT = dict(SCENARIOS["poc"].layout)
 
 

@@ -18,14 +18,14 @@ from rtaw_marl.policies import MPDM
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.training.ppo import train
-from tests.training.conftest import POC_ENV, POC_LAYOUT
+from tests.training.conftest import POC_LAYOUT, POC_SIM
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
 
 def _poc_optimum() -> float:
     """Exhaustive search over every action sequence of the proof of concept."""
-    sim = build_sim(SimSpec.of(POC_ENV, POC_LAYOUT, "direct", "poc"))
+    sim = build_sim(SimSpec.of(POC_SIM, POC_LAYOUT, "direct", "poc"))
     best = np.inf
     for actions in itertools.product(range(2), repeat=5):
         sim.reset(0)
@@ -49,7 +49,7 @@ def test_poc_reaches_the_exhaustive_optimum(train_cfg, tmp_path: Path) -> None:
     assert result.best_ttd == pytest.approx(optimum, abs=1e-3)
     assert result.mpdm_ttd == pytest.approx(22.737, abs=1e-3)
     # The best checkpoint reproduces it through the evaluation path.
-    sim = build_sim(SimSpec.of(POC_ENV, POC_LAYOUT, "direct", "poc"))
+    sim = build_sim(SimSpec.of(POC_SIM, POC_LAYOUT, "direct", "poc"))
     policy = load_policy(result.best_checkpoint)
     sim.reset(0)
     total = 0.0
@@ -113,12 +113,12 @@ def test_rtaw_plus_warm_started_on_lookahead_beats_mpdm_on_held_out_seeds(
     same seed; on 100-task episodes that once fell just below significance.
     """
     cfg = train_cfg([
-        "model=rtaw_plus", "algo=ppo", "env.num_tasks=100", "imitation.teacher=lookahead",
+        "model=rtaw_plus", "algo=ppo", "sim.num_tasks=100", "imitation.teacher=lookahead",
         "imitation.frames=8192", "imitation.rounds=2", "algo.frames_per_batch=2048",
         "algo.minibatch_size=512", "frames=2048", "selection.every_frames=2048", "seed=0",
     ])  # fmt: skip
     result = train(cfg, tmp_path)
-    sim = build_sim(train_cfg(["model=rtaw_plus", "env.num_tasks=300"]).sim_spec())
+    sim = build_sim(train_cfg(["model=rtaw_plus", "sim.num_tasks=300"]).sim_spec())
     policies = {"mpdm": MPDM(), "rtaw_plus": load_policy(result.best_checkpoint)}
     res = evaluate(sim, policies, list(range(20)))
     diff = paired_difference(res["mpdm"]["ttd"], res["rtaw_plus"]["ttd"])

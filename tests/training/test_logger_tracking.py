@@ -43,7 +43,7 @@ def test_mlflow_run_in_a_local_store_holds_metrics_and_the_config(
         assert [m.step for m in client.get_metric_history(run.info.run_id, name)] == [256, 512]
     params = run.data.params
     assert params["algo.lr"] == str(result_cfg_lr(train_cfg))
-    assert params["env.num_robots"] == "2"
+    assert params["sim.num_robots"] == "2"
     assert params["selection.seeds"] == "[1000]"
     assert params["logger.name"] == "mlflow"
     assert params["model.name"] == "rtaw"

@@ -49,7 +49,7 @@ def test_rtaw_train_on_a_lorr_problem_with_pibt(train_cfg, tmp_path: Path) -> No
     """A short RTAW+ run on a LoRR problem: checkpoints are written, and the saved policy
     evaluates on the same scenario with every PIBT episode passing the checker."""
     problem = _tiny_lorr_problem(tmp_path)
-    overrides = ["scenario=lorr", f"tasks.problem={problem}", "env.horizon=60",
+    overrides = ["scenario=lorr", f"tasks.problem={problem}", "sim.horizon=60",
                  "frames=1024", "selection.every_frames=512", "collector.envs_per_worker=4",
                  "model=rtaw_plus"]  # fmt: skip
     result = train(train_cfg(overrides), tmp_path / "run")

@@ -26,7 +26,7 @@ MIX = ["open60_direct_m10:t40", "A_astar_m10:m3:n4:t24:paper"]
 def test_a_mix_trains_one_policy_for_every_member(train_cfg, tmp_path: Path) -> None:
     cfg = train_cfg(
         [
-            "scenario=open60_direct_m10", "env.num_tasks=40", "model=rtaw_plus",
+            "scenario=open60_direct_m10", "sim.num_tasks=40", "model=rtaw_plus",
             "model.fleet_summary=true", f"mix=[{','.join(MIX)}]", "collector.envs_per_worker=4",
             "algo.frames_per_batch=256", "algo.minibatch_size=128", "frames=512",
             "selection.every_frames=256", "selection.seeds=[1000,1001]",
@@ -53,7 +53,7 @@ def test_init_actor_starts_from_a_shipped_actor(train_cfg, tmp_path: Path) -> No
     the selection seeds is the shipped policy's own."""
     cfg = train_cfg(
         [
-            "scenario=C_astar_m10", "env.num_tasks=40", "model=rtaw_plus",
+            "scenario=C_astar_m10", "sim.num_tasks=40", "model=rtaw_plus",
             "model.fleet_summary=true", "init_actor=C_astar_m10_long_plus",
             "collector.envs_per_worker=4", "algo.frames_per_batch=256",
             "algo.minibatch_size=128", "frames=256", "selection.every_frames=256",

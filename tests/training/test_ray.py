@@ -141,7 +141,7 @@ def test_eval_sweep_on_the_ray_launcher(cli, ray_cluster, tmp_path: Path):
     pytest.importorskip("hydra_plugins.hydra_ray_launcher")
     sweep = tmp_path / "sweep"
     result = cli("eval", "--multirun", "scenario=poc", "seeds=[0]", "policy=[mpdm]",
-                 "env.num_tasks=4,5", "hydra/launcher=ray", f"hydra.sweep.dir={sweep}")  # fmt: skip
+                 "sim.num_tasks=4,5", "hydra/launcher=ray", f"hydra.sweep.dir={sweep}")  # fmt: skip
     assert result.code == 0, result.err
     done = {p.parent.name: json.loads(p.read_text()) for p in sweep.glob("*/results.json")}
     assert sorted(done) == ["0", "1"]

@@ -72,8 +72,8 @@ def test_trim_keeps_rows_up_to_the_checkpoint(tmp_path: Path) -> None:
 
 def test_resume_on_another_scenario_is_refused(train_cfg, tmp_path: Path) -> None:
     first = train(train_cfg([*TINY, "frames=512"]), tmp_path / "a")
-    cfg = train_cfg([*TINY, "frames=1024", "env.num_tasks=3", f"resume={first.last_checkpoint}"])
-    with pytest.raises(ConfigError, match=r"another scenario \(env.num_tasks: 5 -> 3\)"):
+    cfg = train_cfg([*TINY, "frames=1024", "sim.num_tasks=3", f"resume={first.last_checkpoint}"])
+    with pytest.raises(ConfigError, match=r"another scenario \(sim.num_tasks: 5 -> 3\)"):
         train(cfg, tmp_path / "b")
 
 
@@ -81,7 +81,7 @@ def test_resume_on_another_scenario_when_asked_resets_the_best(train_cfg, tmp_pa
     first = train(train_cfg([*TINY, "frames=512"]), tmp_path / "a")
     resumed = train(
         train_cfg(
-            [*TINY, "frames=1024", "env.num_tasks=3", "resume_new_scenario=true",
+            [*TINY, "frames=1024", "sim.num_tasks=3", "resume_new_scenario=true",
              f"resume={first.last_checkpoint}"]
         ),
         tmp_path / "b",
@@ -89,7 +89,7 @@ def test_resume_on_another_scenario_when_asked_resets_the_best(train_cfg, tmp_pa
     assert [row["frames"] for row in resumed.history] == [1024]
     best = load_checkpoint(resumed.best_checkpoint)
     assert best["best_ttd"] == resumed.history[0]["ttd"]
-    assert best["config"]["env"]["num_tasks"] == 3
+    assert best["config"]["sim"]["num_tasks"] == 3
 
 
 def test_resume_into_a_new_folder_brings_its_best(train_cfg, tmp_path: Path) -> None:
@@ -215,4 +215,23 @@ def test_resume_from_a_run_that_says_eval_for_selection(train_cfg, tmp_path: Pat
     assert [row["frames"] for row in resumed.history] == [0, 512, 1024]
     other = train_cfg([*TINY, "frames=1024", "selection.seeds=[1001]", f"resume={old}"])
     with pytest.raises(ConfigError, match=r"selection.seeds: \[1000, .*\] -> \[1001\]"):
+        train(other, tmp_path / "c")
+
+
+def test_resume_from_a_run_that_says_env_for_sim(train_cfg, tmp_path: Path) -> None:
+    """A run saved before the simulator's group ``env`` was renamed ``sim`` (the shipped
+    checkpoints say ``env`` too) resumes as the same scenario: its simulator keys are
+    compared under today's name, and a changed one is named ``sim.*``."""
+    first = train(train_cfg([*TINY, "frames=512"]), tmp_path / "a")
+    ckpt = load_checkpoint(first.last_checkpoint)
+    ckpt["config"] = {("env" if k == "sim" else k): v for k, v in ckpt["config"].items()}
+    ckpt["command"] = [
+        a.replace("sim.", "env.", 1) if a.startswith("sim.") else a for a in ckpt["command"]
+    ]
+    old = save_checkpoint(tmp_path / "old.pt", ckpt)
+    resumed = train(train_cfg([*TINY, "frames=1024", f"resume={old}"]), tmp_path / "b")
+    assert [row["frames"] for row in resumed.history] == [0, 512, 1024]
+    assert "sim" in load_checkpoint(resumed.last_checkpoint)["config"]
+    other = train_cfg([*TINY, "frames=1024", "sim.num_tasks=3", f"resume={old}"])
+    with pytest.raises(ConfigError, match=r"another scenario \(sim.num_tasks: 5 -> 3\)"):
         train(other, tmp_path / "c")

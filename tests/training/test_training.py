@@ -21,7 +21,7 @@ from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.evaluator import greedy_ttd
 from rtaw_marl.training.ppo import train
-from tests.training.conftest import POC_ENV, POC_LAYOUT
+from tests.training.conftest import POC_LAYOUT, POC_SIM
 
 pytestmark = pytest.mark.integration
 
@@ -68,7 +68,7 @@ def test_resume_continues_frames_and_reloads_parameters(train_cfg, tmp_path: Pat
 
 
 def _poc_spec() -> dict:
-    return {"env": POC_ENV, "layout": POC_LAYOUT, "navigator": "direct", "tasks": "poc"}
+    return {"sim": POC_SIM, "layout": POC_LAYOUT, "navigator": "direct", "tasks": "poc"}
 
 
 def test_same_seed_same_training_run(train_cfg, tmp_path: Path) -> None:
@@ -85,7 +85,7 @@ def test_same_seed_same_warm_started_run(train_cfg, tmp_path: Path) -> None:
     """Imitation included: the teacher's tie-breaking follows the run's seed (lookahead
     ties often on the default scenario, where every robot starts free at time 0)."""
     warm = ["model=rtaw_plus", "imitation.teacher=lookahead", "imitation.frames=1024",
-            "imitation.rounds=2", "env.num_tasks=60", "frames=512", "selection.every_frames=512",
+            "imitation.rounds=2", "sim.num_tasks=60", "frames=512", "selection.every_frames=512",
             "algo.frames_per_batch=512", "algo.minibatch_size=128"]  # fmt: skip
     a = train(train_cfg(warm), tmp_path / "a")
     b = train(train_cfg(warm), tmp_path / "b")
@@ -225,9 +225,9 @@ def test_train_then_eval_cli_on_other_sizes(tmp_path: Path) -> None:
             str(bin_dir / "rtaw-eval"),
             "policy=[mpdm,checkpoint]",
             f"checkpoint={ckpt}",
-            "env.num_robots=20",
-            "env.queue_len=5",
-            "env.num_tasks=50",
+            "sim.num_robots=20",
+            "sim.queue_len=5",
+            "sim.num_tasks=50",
             "navigator=direct",
             "seeds=[0]",
             f"output={tmp_path / 'r.json'}",

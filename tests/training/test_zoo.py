@@ -61,7 +61,8 @@ def test_the_recipe_table_is_every_shipped_policy_and_names_real_scenarios() -> 
 @pytest.mark.parametrize("name", sorted(ZOO))
 def test_each_shipped_checkpoint_records_its_recipe(name: str) -> None:
     """The recorded command is the recipe's, so the policy can be retrained exactly
-    (recorded with ``eval.*``, the old name of ``selection.*``: the same keys)."""
+    (recorded with ``eval.*`` and ``env.*``, the old names of ``selection.*`` and
+    ``sim.*``: the same keys)."""
     ckpt = load_checkpoint(pretrained_path(name))
     overrides = ZOO[name].overrides()
     command = upgrade_command(ckpt["command"])
@@ -81,7 +82,7 @@ def test_a_shipped_checkpoints_old_eval_section_reads_as_selection() -> None:
     recipe_cfg = as_plain(to_typed(compose("train", ZOO["A_astar_m10"].overrides())))
     # (It predates selection.keep.)
     assert stored["selection"] == {k: recipe_cfg["selection"][k] for k in ("every_frames", "seeds")}
-    # Its selection seeds compare under today's name (its env predates newer env keys).
+    # Its selection seeds compare under today's name (its sim section predates newer keys).
     changes = scenario_changes(ckpt["config"], recipe_cfg)
     assert not [c for c in changes if c.startswith(("selection", "eval"))], changes
     command = upgrade_command(ckpt["command"])
@@ -91,6 +92,28 @@ def test_a_shipped_checkpoints_old_eval_section_reads_as_selection() -> None:
     assert upgrade_command(command) == command
 
 
+def test_a_shipped_checkpoints_old_env_section_reads_as_sim() -> None:
+    """The shipped checkpoints record the simulator's keys under their old name, ``env``
+    (config and command): read under today's names (``sim``, in the same place), they
+    are the recipe's own keys, and the command composes as it is."""
+    ckpt = load_checkpoint(pretrained_path("A_astar_m10"))
+    assert "env" in ckpt["config"]
+    assert "sim" not in ckpt["config"]
+    assert any(arg.startswith("env.num_robots=") for arg in ckpt["command"])
+    stored = upgrade_config(ckpt["config"])
+    assert list(stored).index("sim") == list(ckpt["config"]).index("env")
+    assert stored["sim"] == ckpt["config"]["env"]
+    recipe_cfg = as_plain(to_typed(compose("train", ZOO["A_astar_m10"].overrides())))
+    changes = scenario_changes(ckpt["config"], recipe_cfg)
+    # The keys both name agree (it predates the newer simulator keys, which only one has).
+    assert not [c for c in changes if c.startswith("sim.") and "None ->" not in c], changes
+    assert not [c for c in changes if c.startswith("env.")], changes
+    command = upgrade_command(ckpt["command"])
+    assert not any(arg.startswith("env.") for arg in command)
+    assert "sim.num_robots=10" in command
+    assert to_typed(compose("train", command[1:])).sim.num_robots == 10
+
+
 @pytest.mark.parametrize("name", sorted(ZOO))
 def test_each_recipe_trains_on_its_scenario(name: str) -> None:
     """The command's spelling (the default tasks left out) composes the named scenario,
@@ -98,8 +121,8 @@ def test_each_recipe_trains_on_its_scenario(name: str) -> None:
     entry = ZOO[name]
     spelled = to_typed(compose("train", entry.scenario_overrides())).sim_spec()
     assert spelled == entry.setting().spec()
-    env = [f"env.{k}={v}" for k, v in entry.env.items()]
-    assert to_typed(compose("train", [f"scenario={entry.scenario}", *env])).sim_spec() == spelled
+    sim = [f"sim.{k}={v}" for k, v in entry.sim.items()]
+    assert to_typed(compose("train", [f"scenario={entry.scenario}", *sim])).sim_spec() == spelled
 
 
 @pytest.mark.parametrize("name", [n for n in STAGED if ZOO[n].stage == "curriculum"])
@@ -109,7 +132,7 @@ def test_curriculum_policies_continue_their_base_with_500_robots(name: str) -> N
     entry = ZOO[name]
     assert load_checkpoint(pretrained_path(entry.base))["frames"] == entry.base_frames
     ckpt = load_checkpoint(pretrained_path(name))
-    assert ckpt["config"]["env"]["num_robots"] == 500
+    assert upgrade_config(ckpt["config"])["sim"]["num_robots"] == 500
     assert ckpt["config"]["resume"] == f"runs/pretrained/{entry.base}/checkpoints/best.pt"
     assert entry.base_frames < ckpt["frames"] <= ckpt["config"]["frames"] == entry.budget
     assert entry.budget == entry.base_frames + CURRICULUM_FRAMES

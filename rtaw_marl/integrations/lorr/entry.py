@@ -81,11 +81,11 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler:
 
     # Fields of a big map are big (280 KB on warehouse_large): a cache for thousands.
     scenario = lorr_scenario(spec.problem, navigator={"name": "astar", "cache_mb": 1024.0})
-    m = int(scenario.env["num_robots"])
+    m = int(scenario.sim["num_robots"])
     # Instant travel on the map; one decision per free robot and timestep at most, and
     # no horizon of its own: LoRR's simulator ends the episode.
     sim = build_sim(
-        scenario.with_env(num_tasks=m + int(scenario.env["queue_len"]), horizon=10**9).spec()
+        scenario.with_sim(num_tasks=m + int(scenario.sim["queue_len"]), horizon=10**9).spec()
     )
     if is_import_spec(spec.policy):
         if spec.search_path is not None and spec.search_path not in sys.path:

@@ -77,7 +77,7 @@ class PolicyScheduler:
         policy: Any policy (``act_sim``).
         sim: The mirror: a simulator of the problem's map and ``M`` robots with instant
             travel, a queue as long as LoRR's window (``ceil(numTasksReveal x M)``),
-            ``env.num_tasks`` above ``M``; reset here.
+            ``sim.num_tasks`` above ``M``; reset here.
         seed: Seeds the policy's tie-breaking.
         clock: Seconds (``time.perf_counter``).
     """

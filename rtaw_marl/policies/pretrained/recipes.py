@@ -81,7 +81,7 @@ class Recipe:
     Attributes:
         name: The shipped name (``rtaw_marl/policies/pretrained/<name>.pt``).
         scenario: Its :data:`~rtaw_marl.scenarios.SCENARIOS` name.
-        env: Simulator keys it changes on that scenario (a curriculum's 500 robots).
+        sim: Simulator keys it changes on that scenario (a curriculum's 500 robots).
         model: ``rtaw`` (the paper's network) or ``rtaw_plus``.
         frames: PPO frames: the run's budget (``train``, ``continued``), or what it adds
             to its base's best checkpoint (``curriculum``).
@@ -91,7 +91,7 @@ class Recipe:
         base_frames: A curriculum's base: its best checkpoint's PPO frames.
         seed: The training seed.
         mix: A generalist's training mix (:mod:`rtaw_marl.scenarios.mix`); its
-            :attr:`scenario` (with :attr:`env`) then only selects the checkpoints, and
+            :attr:`scenario` (with :attr:`sim`) then only selects the checkpoints, and
             its actor starts from :attr:`base`'s (``init_actor``).
         second_stage: Settings (mix member names) of a second selection stage on fresh
             selection seeds (:mod:`rtaw_marl.training.selection`): the shipped
@@ -101,7 +101,7 @@ class Recipe:
 
     name: str
     scenario: str
-    env: Mapping[str, Any] = field(default_factory=dict)
+    sim: Mapping[str, Any] = field(default_factory=dict)
     model: str = "rtaw"
     frames: int = BUDGET
     stage: str = "train"
@@ -112,8 +112,8 @@ class Recipe:
     second_stage: tuple[str, ...] = ()
 
     def setting(self) -> Scenario:
-        """The scenario it trains on (with :attr:`env`'s changes)."""
-        return SCENARIOS[self.scenario].with_env(**self.env)
+        """The scenario it trains on (with :attr:`sim`'s changes)."""
+        return SCENARIOS[self.scenario].with_sim(**self.sim)
 
     @property
     def budget(self) -> int:
@@ -130,15 +130,15 @@ def _recipes() -> list[Recipe]:
     # The default warehouse's policies (the demo's): its commands spell the 10 robots.
     trained = [("shelves_astar_m10", "default", {"num_robots": 10})]
     trained += [(name, name, {}) for name in (*table1, *TABLE2_BASES)]
-    out = [Recipe(name=n, scenario=s, env=env) for n, s, env in trained]
+    out = [Recipe(name=n, scenario=s, sim=sim) for n, s, sim in trained]
     out += [
-        Recipe(name=f"{n}_plus", scenario=s, env=env, model="rtaw_plus") for n, s, env in trained
+        Recipe(name=f"{n}_plus", scenario=s, sim=sim, model="rtaw_plus") for n, s, sim in trained
     ]
     for base, base_frames in zip(TABLE2_BASES, (368_640, 409_600), strict=True):
         out.append(
             Recipe(
                 name=base.replace("_m100_", "_m500_") + "_plus", scenario=base,
-                env={"num_robots": 500, "num_tasks": 2500}, model="rtaw_plus",
+                sim={"num_robots": 500, "num_tasks": 2500}, model="rtaw_plus",
                 frames=CURRICULUM_FRAMES, stage="curriculum", base=f"{base}_plus",
                 base_frames=base_frames,
             )
@@ -154,7 +154,7 @@ def _recipes() -> list[Recipe]:
     out.append(
         Recipe(
             name="generalist_plus", scenario="A_astar_m100",
-            env={"num_robots": 200, "episode_mode": "paper"}, model="rtaw_plus",
+            sim={"num_robots": 200, "episode_mode": "paper"}, model="rtaw_plus",
             frames=GENERALIST_FRAMES, stage="generalist", base="C_astar_m100_long_plus",
             mix=GENERALIST, second_stage=GENERALIST_SECOND_STAGE,
         )

@@ -9,7 +9,7 @@ robot has to wait to plan); once the episode is done the simulator's records hol
 executed times and :meth:`FleetExecutor.schedule` the executed episode.
 
 Completion times come from the planned paths and are whole seconds, so the
-simulator's completion noise must be zero (``env.noise_mean=0 env.noise_var=0``; the
+simulator's completion noise must be zero (``sim.noise_mean=0 sim.noise_var=0``; the
 ``navigator=sipp``/``navigator=cbs`` config options set it).
 """
 
@@ -195,5 +195,5 @@ def _check_distinct(starts: np.ndarray, name: str) -> None:
         x, y = (int(v) for v in cells[a])
         raise ConfigError(
             f"robots {a} and {b} both start at (x={x}, y={y}); navigator {name!r} keeps "
-            "robots on distinct cells: give env.robot_starts distinct cells"
+            "robots on distinct cells: give sim.robot_starts distinct cells"
         )

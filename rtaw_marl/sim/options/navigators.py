@@ -37,9 +37,9 @@ class NavigatorOption(Option):
     group: ClassVar[str] = "navigator"
     #: Whether robots occupy cells and wait for each other.
     collision_aware: ClassVar[bool] = False
-    #: Simulator keys this option changes unless they are given (its YAML twin's ``env``
+    #: Simulator keys this option changes unless they are given (its YAML twin's ``sim``
     #: block): ``SimSpec.of(navigator="sipp")`` and ``navigator=sipp`` build the same.
-    env_defaults: ClassVar[Mapping[str, float]] = MappingProxyType({})
+    sim_defaults: ClassVar[Mapping[str, float]] = MappingProxyType({})
 
     def distance_model(self, layout: Layout) -> DistanceModel:
         """The distance model on ``layout`` (shared by every simulator of a batch)."""
@@ -92,7 +92,7 @@ class SIPPConfig(NavigatorOption):
     name: str = "sipp"
     collision_aware: ClassVar[bool] = True
     # Tasks are timed by their executed paths in whole seconds: no completion noise.
-    env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
+    sim_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     time_limit: float = 10.0
 
     def __post_init__(self) -> None:
@@ -118,7 +118,7 @@ class CBSConfig(NavigatorOption):
     name: str = "cbs"
     collision_aware: ClassVar[bool] = True
     # Tasks are timed by their executed paths in whole seconds: no completion noise.
-    env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
+    sim_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     time_limit: float = 10.0
     max_nodes: int = 200
 
@@ -154,7 +154,7 @@ class PIBTConfig(NavigatorOption):
     name: str = "pibt"
     collision_aware: ClassVar[bool] = True
     # Tasks are timed by the executed moves in whole seconds: no completion noise.
-    env_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
+    sim_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     stall_limit: int = 10_000
     patience: int = 16
     record: bool = True

@@ -158,7 +158,7 @@ class LoRRTasksConfig(TaskOption):
     Attributes:
         problem: The problem JSON (required), or ``builtin:random_32_32_20_100.json``,
             the shipped one.
-        starts: ``file`` (the first ``env.num_robots`` cells of its agent file) or
+        starts: ``file`` (the first ``sim.num_robots`` cells of its agent file) or
             ``random`` (distinct random free cells per seed, for more robots).
     """
 

@@ -40,12 +40,12 @@ def play(
     tasks: list[tuple[int, int, int, int]],
     actions: list[int] | None = None,
     queue_len: int = 1,
-    **env: object,
+    **sim: object,
 ) -> tuple[WarehouseSim, Schedule]:
     """Serve ``tasks`` (first queued first, or by ``actions``); check the executed schedule."""
     config = SimConfig(
         num_robots=len(starts), num_tasks=len(tasks), queue_len=queue_len, noise_mean=0.0,
-        noise_var=0.0, robot_starts=tuple(starts), **env,
+        noise_var=0.0, robot_starts=tuple(starts), **sim,
     )  # fmt: skip
     option = navigator_option(navigator)
     sim = WarehouseSim(config, layout, option.distance_model(layout), FixedTasks(tasks),
@@ -149,12 +149,12 @@ def test_config_errors(nav: str) -> None:
     layout = open_grid(4, 4)
     tasks = FixedTasks([(0, 0, 1, 1)])
     astar = GridDistance(layout)
-    with pytest.raises(ConfigError, match=rf"navigator '{nav}' .*env.noise_mean=0 env.noise_var=0"):
+    with pytest.raises(ConfigError, match=rf"navigator '{nav}' .*sim.noise_mean=0 sim.noise_var=0"):
         WarehouseSim(SimConfig(num_robots=1, num_tasks=1), layout, astar, tasks,
                      executor=navigator_option(nav).executor())  # fmt: skip
     config = SimConfig(num_robots=1, num_tasks=1, noise_mean=0, noise_var=0,
                        robot_free_times=(0.5,))  # fmt: skip
-    with pytest.raises(ConfigError, match=r"whole-second env.robot_free_times"):
+    with pytest.raises(ConfigError, match=r"whole-second sim.robot_free_times"):
         WarehouseSim(config, layout, astar, tasks, executor=navigator_option(nav).executor())
     for bad in (0, -1.0, True, "3"):
         with pytest.raises(ConfigError, match=r"navigator.time_limit must be a positive"):
@@ -193,15 +193,15 @@ def test_executor_parameters_are_explicit_and_checked() -> None:
 def test_registry_builds_astar_plus_the_executor_with_its_parameters() -> None:
     """``sipp``/``cbs`` specs: an A* distance model and the executor with exactly the values
     given."""
-    env = {"num_robots": 2, "num_tasks": 2, "noise_mean": 0.0, "noise_var": 0.0}
+    keys = {"num_robots": 2, "num_tasks": 2, "noise_mean": 0.0, "noise_var": 0.0}
     sim = build_sim(
-        SimSpec.of(env, "open", {"name": "cbs", "time_limit": 1.5, "max_nodes": 7}, "random")
+        SimSpec.of(keys, "open", {"name": "cbs", "time_limit": 1.5, "max_nodes": 7}, "random")
     )
     assert isinstance(sim.distance_model, GridDistance)
     assert isinstance(sim.executor, CBSExecutor)
     assert (sim.executor.time_limit, sim.executor.max_nodes) == (1.5, 7)
     assert sim.executor.fleet.max_nodes == 7
-    sim = build_sim(SimSpec.of(env, "open", "sipp", "random"))
+    sim = build_sim(SimSpec.of(keys, "open", "sipp", "random"))
     assert isinstance(sim.distance_model, GridDistance)
     assert isinstance(sim.executor, SIPPExecutor)
     assert sim.executor.time_limit == 10.0
@@ -226,10 +226,10 @@ def test_cbs_node_budget_falls_back_and_counts() -> None:
 @pytest.mark.parametrize("nav", PLANNERS)
 def test_warehouse_episode_is_valid_deterministic_and_consistent(nav: str) -> None:
     """A 60x60 MPDM episode: checker passes, same seed same schedule, TTDs add up."""
-    env = {"num_robots": 10, "num_tasks": 40, "noise_mean": 0.0, "noise_var": 0.0}
+    keys = {"num_robots": 10, "num_tasks": 40, "noise_mean": 0.0, "noise_var": 0.0}
     runs = []
     for _ in range(2):
-        sim = build_sim(SimSpec.of(env, {"name": "preset", "preset": "C"}, nav, "designated"))
+        sim = build_sim(SimSpec.of(keys, {"name": "preset", "preset": "C"}, nav, "designated"))
         run_episode(sim, make_baseline("mpdm"), seed=3)
         schedule = sim.schedule()
         check_schedule(sim.layout, schedule, expected_tasks=40)
@@ -299,10 +299,10 @@ def test_random_small_layouts_complete_without_conflicts(nav: str, scenario: tup
 def test_all_robots_blocked_is_a_planning_error_not_infinite_time() -> None:
     """Regression: when every robot was deferred, one partial resolve could leave the
     next robot selected at t=inf, and the next step crashed with OverflowError."""
-    env = {"num_robots": 3, "num_tasks": 5, "queue_len": 3, "noise_mean": 0, "noise_var": 0,
+    keys = {"num_robots": 3, "num_tasks": 5, "queue_len": 3, "noise_mean": 0, "noise_var": 0,
            "robot_starts": [[1, 0], [2, 1], [0, 1]], "robot_free_times": [0, 3, 2]}  # fmt: skip
     tasks = FixedTasks([[0, 1, 1, 1], [2, 0, 2, 1], [0, 0, 2, 0], [0, 1, 1, 1], [2, 0, 2, 1]])
-    sim = build_sim(SimSpec.of(env, {"name": "open", "width": 3, "height": 2}, "sipp", tasks))
+    sim = build_sim(SimSpec.of(keys, {"name": "open", "width": 3, "height": 2}, "sipp", tasks))
     sim.reset(0)
     for action in [1, 0, 2, 0]:
         sim.step(action)

@@ -1,5 +1,5 @@
 """Lifelong PIBT execution (``navigator=pibt``), fixed-horizon episodes and LoRR's
-reveal window (``env.refill=finish``)."""
+reveal window (``sim.refill=finish``)."""
 
 from __future__ import annotations
 
@@ -130,9 +130,9 @@ def test_pibt_step_never_collides_on_random_grids(seed: int, fill: float) -> Non
         assert (occ_now[pos] == np.arange(m)).all()
 
 
-def warehouse(**env: object) -> WarehouseSim:
+def warehouse(**sim: object) -> WarehouseSim:
     base = {"num_robots": 60, "num_tasks": 200, "queue_len": 10}
-    base.update(env)
+    base.update(sim)
     return build_sim(SimSpec.of(base, {"name": "preset", "preset": "C"}, "pibt", "designated"))
 
 
@@ -172,7 +172,7 @@ def test_horizon_episode_counts_tasks_finished_by_the_horizon() -> None:
 
 
 def test_refill_on_finish_keeps_the_reveal_window() -> None:
-    """env.refill=finish: at every decision, revealed-and-unfinished tasks (queued or in
+    """sim.refill=finish: at every decision, revealed-and-unfinished tasks (queued or in
     progress) never exceed N, and a new task appears only once one is delivered."""
     sim = warehouse(num_robots=20, queue_len=30, refill="finish", num_tasks=120)
     sim.reset(1)
@@ -184,11 +184,11 @@ def test_refill_on_finish_keeps_the_reveal_window() -> None:
 
 
 def test_config_errors_name_the_problem() -> None:
-    with pytest.raises(ConfigError, match=r"env\.episode_mode=horizon needs env\.horizon"):
+    with pytest.raises(ConfigError, match=r"sim\.episode_mode=horizon needs sim\.horizon"):
         SimConfig(episode_mode="horizon")
-    with pytest.raises(ConfigError, match=r"env\.refill=finish needs env\.queue_len > env\.num"):
+    with pytest.raises(ConfigError, match=r"sim\.refill=finish needs sim\.queue_len > sim\.num"):
         SimConfig(num_robots=10, queue_len=10, refill="finish")
-    with pytest.raises(ConfigError, match=r"env\.refill must be one of assign, finish"):
+    with pytest.raises(ConfigError, match=r"sim\.refill must be one of assign, finish"):
         SimConfig(refill="later")
     with pytest.raises(ConfigError, match=r"navigator\.stall_limit must be a positive integer"):
         navigator_option({"name": "pibt", "stall_limit": 0}).executor()
