@@ -92,24 +92,24 @@ def _policy_names(cfg: ViewConfig) -> list[str]:
 def _check_play_cost(spec: SimSpec, episodes: int) -> None:
     """Estimate the run from its setting; refuse one that cannot fit in memory.
 
-    A horizon episode's length is ``env.horizon``; one that runs until its tasks are
+    A horizon episode's length is ``sim.horizon``; one that runs until its tasks are
     done takes about one trip across the map (``W + H`` timesteps: to the pickup, then
     to the delivery) per task a robot serves.
     """
-    env = spec.env
+    sim = spec.sim
     size = spec.layout.size()
     if size is None:  # a map file: its size is known once it is read (cached for later)
         grid = spec.layout.build()
         size = (grid.width, grid.height)
     width, height = size
     fewer = f", or view one policy instead of {episodes}" if episodes > 1 else ""
-    if env.episode_mode == "horizon":
-        timesteps = int(env.horizon)
-        lower = f"lower env.horizon (now {timesteps}) or env.num_robots (now {env.num_robots})"
+    if sim.episode_mode == "horizon":
+        timesteps = int(sim.horizon)
+        lower = f"lower sim.horizon (now {timesteps}) or sim.num_robots (now {sim.num_robots})"
     else:
-        timesteps = math.ceil(env.num_tasks / env.num_robots) * (width + height)
-        lower = f"lower env.num_tasks (now {env.num_tasks})"
-    cost = play_cost(int(env.num_robots), timesteps, episodes, width * height)
+        timesteps = math.ceil(sim.num_tasks / sim.num_robots) * (width + height)
+        lower = f"lower sim.num_tasks (now {sim.num_tasks})"
+    cost = play_cost(int(sim.num_robots), timesteps, episodes, width * height)
     check_cost(cost, lower + fewer, note)
 
 

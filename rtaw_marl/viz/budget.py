@@ -138,7 +138,7 @@ def check_cost(cost: ViewCost, lower: str, note: Callable[[str], None]) -> None:
 
     Args:
         cost: The estimate.
-        lower: What to change, for the refusal (``"lower env.horizon (now 5000) ..."``).
+        lower: What to change, for the refusal (``"lower sim.horizon (now 5000) ..."``).
         note: Where the announcement goes (a progress line).
 
     Raises:

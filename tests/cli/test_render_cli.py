@@ -101,7 +101,7 @@ def test_render_never_overwrites_a_file_it_reads(tmp_path: Path, cli, monkeypatc
     (tmp_path / "sub").mkdir()
     monkeypatch.setattr("rtaw_marl.cli.render.build_sim", lambda *a: pytest.fail("work started"))
     for output in ("p.json", "link.json", "sub/../p.json"):
-        result = cli("render", "scenario=lorr", "tasks.problem=p.json", "env.horizon=10",
+        result = cli("render", "scenario=lorr", "tasks.problem=p.json", "sim.horizon=10",
                      f"output={output}")  # fmt: skip
         assert result.code == 2
         assert f"error: output={output} is the same file as " in result.err
@@ -117,7 +117,7 @@ def test_render_output_in_use_is_refused(tmp_path: Path, cli, monkeypatch) -> No
 
     monkeypatch.setattr("rtaw_marl.cli.render.build_sim", lambda *a: pytest.fail("work started"))
     with claim_file(tmp_path / "episode.gif"):
-        result = cli("render", "env.num_tasks=4", "output=episode.gif")
+        result = cli("render", "sim.num_tasks=4", "output=episode.gif")
     assert result.code == 2
     assert "output=episode.gif is in use by another running process" in result.err
     assert len(result.err.strip().splitlines()) == 1
@@ -132,7 +132,7 @@ def test_render_removes_what_a_killed_write_left(tmp_path: Path, cli) -> None:
     killed.write_text("half a file", encoding="utf-8")
     other = tmp_path / ".f.json.a1b2c3d4.tmp"
     other.write_text("keep", encoding="utf-8")
-    result = cli("render", "layout=A", "env.num_tasks=4", "output=e.json")
+    result = cli("render", "layout=A", "sim.num_tasks=4", "output=e.json")
     assert result.code == 0, result.err
     assert not killed.exists()
     assert other.read_text(encoding="utf-8") == "keep"

@@ -211,7 +211,7 @@ def test_a_bad_schedule_is_one_line_and_writes_nothing(
 
 
 # ------------------------------------------------------------------- memory estimate
-BIG = ["layout=A", "env.episode_mode=horizon", "env.horizon=5000", "env.num_robots=30000",
+BIG = ["layout=A", "sim.episode_mode=horizon", "sim.horizon=5000", "sim.num_robots=30000",
        "policy=[mpdm,lookahead]", "output=v.html"]  # fmt: skip
 
 
@@ -226,20 +226,20 @@ def test_a_view_that_cannot_fit_is_refused_before_work(
     monkeypatch.setattr("rtaw_marl.cli.view.build_sim", lambda *a: pytest.fail("work started"))
     result = cli("view", *BIG)
     _one_line_error(result, "30,000 robots x 5,000 timesteps x 2 episodes needs about ")
-    assert "more than the 20.0 GB available on this machine; lower env.horizon (now 5000) " in (
+    assert "more than the 20.0 GB available on this machine; lower sim.horizon (now 5000) " in (
         result.err
     )
-    assert "or env.num_robots (now 30000), or view one policy instead of 2" in result.err
+    assert "or sim.num_robots (now 30000), or view one policy instead of 2" in result.err
     assert not (tmp_path / "v.html").exists()
     assert _leftovers(tmp_path) == []
 
 
 def test_a_view_no_machine_holds_is_refused(tmp_path: Path, cli) -> None:
     """A setting of petabytes is refused on this machine as it is (nothing patched)."""
-    result = cli("view", "layout=A", "env.episode_mode=horizon", "env.horizon=1000000000",
-                 "env.num_robots=10", "output=v.html")  # fmt: skip
+    result = cli("view", "layout=A", "sim.episode_mode=horizon", "sim.horizon=1000000000",
+                 "sim.num_robots=10", "output=v.html")  # fmt: skip
     _one_line_error(result, "10 robots x 1,000,000,000 timesteps needs about 1,")
-    assert "lower env.horizon (now 1000000000)" in result.err
+    assert "lower sim.horizon (now 1000000000)" in result.err
     assert not (tmp_path / "v.html").exists()
 
 
@@ -249,11 +249,11 @@ def test_a_small_view_is_not_refused_and_a_big_one_is_announced(
     import rtaw_marl.viz.budget as budget
 
     monkeypatch.setattr(budget, "available_memory", lambda: 2 * 10**9)
-    small = cli("view", "layout=A", "env.num_tasks=4", "output=v.html")
+    small = cli("view", "layout=A", "sim.num_tasks=4", "output=v.html")
     assert small.code == 0, small.err
     assert "estimate:" not in small.err
     monkeypatch.setattr(budget, "SHOWN_BYTES", 0)  # any run counts as big now
-    shown = cli("view", "layout=A", "env.num_tasks=4", "output=w.html")
+    shown = cli("view", "layout=A", "sim.num_tasks=4", "output=w.html")
     assert shown.code == 0, shown.err
     assert "estimate: 10 robots x " in shown.err
     assert "of memory (2.0 GB available) and about " in shown.err

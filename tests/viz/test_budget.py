@@ -37,11 +37,11 @@ def test_a_run_that_cannot_fit_is_refused_naming_what_to_lower(monkeypatch) -> N
     notes: list[str] = []
     cost = play_cost(30_000, 5_000, 2, WAREHOUSE_LARGE)
     with pytest.raises(ConfigError) as info:
-        check_cost(cost, "lower env.horizon (now 5000)", notes.append)
+        check_cost(cost, "lower sim.horizon (now 5000)", notes.append)
     text = str(info.value)
     assert text.startswith("30,000 robots x 5,000 timesteps x 2 episodes needs about 2")
     assert text.endswith(
-        "more than the 22.0 GB available on this machine; lower env.horizon (now 5000)"
+        "more than the 22.0 GB available on this machine; lower sim.horizon (now 5000)"
     )
     assert notes == []
 
@@ -52,7 +52,7 @@ def test_a_small_run_is_neither_refused_nor_announced(monkeypatch) -> None:
     notes: list[str] = []
     cost = play_cost(10, 200, 2, 1_500)
     assert cost.nbytes < 100 * 2**20
-    check_cost(cost, "lower env.horizon", notes.append)
+    check_cost(cost, "lower sim.horizon", notes.append)
     assert notes == []
 
 
