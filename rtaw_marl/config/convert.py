@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from collections.abc import Sequence
 from typing import Any
 
@@ -217,9 +218,13 @@ def _unknown_key(key: str, schema: type) -> ConfigError:
 
 
 def _missing_option(exc: MissingConfigException, options: list[str]) -> ConfigError:
-    """Hydra's ``In 'eval': Could not find 'navigator/sipq'`` with the group's options
-    and the closest ones (``did you mean 'navigator=sipp'?``)."""
+    """Hydra's ``Could not find 'navigator/sipq'`` with the group's options and the
+    closest ones (``did you mean 'navigator=sipp'?``)."""
     first = str(exc).strip().splitlines()[0]
+    # Hydra begins with the config that chose the group ("In 'eval': ", or "In
+    # 'setting/default': " for a simulator group, config.store.SETTINGS): not what the
+    # user typed, so left out.
+    first = re.sub(r"^In '[^']*': ", "", first)
     group, _, name = (exc.missing_cfg_file or "").rpartition("/")
     # The group as typed on the command line: hydra/launcher=..., navigator=...
     hint = did_you_mean(name, options, prefix=f"{group}=") if group else ""

@@ -32,6 +32,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from rtaw_marl.config.reference import attribute_docs
 from rtaw_marl.config.store import CONF_DIR, group_options
+from rtaw_marl.sim.builder import DEFAULT_OPTIONS
 
 __all__ = ["APPENDABLE", "GROUP_DOCS", "app_groups", "help_text", "register_help"]
 
@@ -66,7 +67,10 @@ def app_groups(app: str) -> list[str]:
     primary = yaml.safe_load((CONF_DIR / f"{app}.yaml").read_text()) or {}
     groups = []
     for entry in primary.get("defaults", []):
-        # "- sim: default" names a group; "- /schema/eval@_here_" and "- _self_" do not.
+        if isinstance(entry, str) and entry.startswith("/setting/"):
+            # "- /setting/default@_here_": the simulator groups (config.store.SETTINGS).
+            groups += [g for g in DEFAULT_OPTIONS if g not in groups]
+        # "- model: rtaw" names a group; "- /schema/eval@_here_" and "- _self_" do not.
         if isinstance(entry, dict) and len(entry) == 1:
             (key,) = entry
             group = str(key).partition("@")[0]

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import itertools
 import os
+from collections.abc import Mapping
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import yaml
@@ -29,13 +31,14 @@ from rtaw_marl.evaluation.config import EvalConfig, RenderConfig, ViewConfig
 from rtaw_marl.integrations.lorr.config import LoRRConfig
 from rtaw_marl.models.config import MODELS
 from rtaw_marl.scenarios.lorr import lorr_value
+from rtaw_marl.sim.builder import DEFAULT_OPTIONS
 from rtaw_marl.sim.config import SimConfig
 from rtaw_marl.sim.options import LAYOUTS, NAVIGATORS, TASK_STREAMS
 from rtaw_marl.training.config import CollectorConfig, PPOConfig, TrainConfig
 from rtaw_marl.training.loggers.config import LOGGER_OPTIONS
 from rtaw_marl.training.zoo import ZOO
 
-__all__ = ["CONF_DIR", "GROUPS", "group_options", "register_configs"]
+__all__ = ["CONF_DIR", "GROUPS", "SETTINGS", "group_options", "register_configs"]
 
 #: The packaged Hydra config folder (``rtaw_marl/conf``).
 CONF_DIR = Path(__file__).resolve().parents[1] / "conf"
@@ -51,6 +54,14 @@ GROUPS: dict[str, dict[str, type]] = {
     "collector": {"default": CollectorConfig},
     "logger": dict(LOGGER_OPTIONS),
 }
+
+#: The simulator groups' options a command starts from (``/setting/NAME`` in its
+#: defaults list): ``default``, what :class:`~rtaw_marl.sim.builder.SimSpec` builds
+#: (rtaw-eval, rtaw-train); ``watch``, the same with collision-free SIPP execution
+#: (rtaw-render, rtaw-view: an episode to look at).
+SETTINGS: Mapping[str, Mapping[str, str]] = MappingProxyType(
+    {"default": DEFAULT_OPTIONS, "watch": {**DEFAULT_OPTIONS, "navigator": "sipp"}}
+)
 
 #: Primary configs -> their schema.
 APPS: dict[str, type] = {
@@ -92,6 +103,10 @@ def register_configs() -> None:
         if option.sim_defaults:
             store.store(group="navigator", name=name, node=_navigator_node(name, option),
                         package="_global_")  # fmt: skip
+    # The simulator groups' default options, from SimSpec's own (one place): each
+    # command's defaults list includes one of SETTINGS.
+    for name, options in SETTINGS.items():
+        store.store(group="setting", name=name, node=_setting_node(options))
     # scenario=NAME and row=NAME: the scenario registry's entries (config.scenarios).
     register_scenarios(store)
     # rtaw-train -m +zoo=A_astar_m10,B_astar_m10: the shipped policies' recipes
@@ -113,6 +128,12 @@ def group_options(group: str) -> list[str]:
     if store.get_type(group) is ObjectType.GROUP:
         options |= {name.removesuffix(".yaml") for name in store.list(group)}
     return sorted(options)
+
+
+def _setting_node(options: Mapping[str, str]) -> dict[str, Any]:
+    """A :data:`SETTINGS` entry as a defaults list (a scenario or the command line may
+    still choose another option of each group)."""
+    return {"defaults": [{f"/{group}": name} for group, name in options.items()]}
 
 
 def _navigator_node(name: str, option: type) -> dict[str, Any]:

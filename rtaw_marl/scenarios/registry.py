@@ -1,4 +1,13 @@
-"""The scenario registry: every named setting, written once."""
+"""The scenario registry: every named setting, written once.
+
+A scenario is a warehouse a user can name on any command (``scenario=C_astar_m100``) or
+in Python (``warehouse_v1.env(scenario=...)``), with the shipped policies trained on it.
+Three families: the default warehouse and two small sanity settings (:func:`_basics`);
+the 60x60 warehouses of the RTAW paper's layouts A-E and an open grid, with 10 and 100
+robots (:func:`_warehouses_60x60`); and two large grids with random tasks, up to 1,000
+robots (:func:`_large_grids`). The descriptions say which of the paper's tables each
+reproduces; the tables themselves are the benchmarks project's (``benchmarks/``).
+"""
 
 from __future__ import annotations
 
@@ -87,13 +96,13 @@ def _scenario(name: str, title: str, description: str, **fields: Any) -> Scenari
     return Scenario(name=name, title=title, description=description, **fields)
 
 
-#: Table I's robot counts: each row runs with 10 and with 100 robots.
+#: The robot counts of the 60x60 warehouses (the paper's Table I): 10 and 100.
 TABLE1_ROBOTS = (10, 100)
 
 
-def _table1() -> list[Scenario]:
-    """Table I's settings (60x60, 500 designated tasks, queue of 10), as trained: each
-    with its RTAW+ and the paper's network at 1,228,800 frames."""
+def _warehouses_60x60() -> list[Scenario]:
+    """The 60x60 warehouses (500 designated tasks, queue of 10; the paper's Table I), as
+    trained: each with its RTAW+ and the paper's network at 1,228,800 frames."""
     rows = [("open60_direct", "Direct (open 60x60)", "open", "direct", "the open 60x60 grid")]
     rows += [(f"{p}_astar", f"A* layout {p}", p, "astar", f"layout {p}") for p in "ABCDE"]
     out = []
@@ -114,9 +123,10 @@ def _table1() -> list[Scenario]:
     return out
 
 
-def _table2() -> list[Scenario]:
-    """Table II's large grids (random tasks over the whole grid, 5,000-task episodes in
-    the paper's mode) and the 100-robot settings their policies were trained on."""
+def _large_grids() -> list[Scenario]:
+    """The large grids (random tasks over the whole grid, 5,000-task episodes in the
+    paper's mode; its Table II) and the 100-robot settings their policies were trained
+    on."""
     grids = [
         ("open300_direct", "Direct, open 300x300", {"name": "open", "width": 300, "height": 300},
          "direct"),
@@ -154,8 +164,9 @@ def _table2() -> list[Scenario]:
     return out
 
 
-def _appendix() -> list[Scenario]:
-    """The default warehouse and the paper's appendix settings."""
+def _basics() -> list[Scenario]:
+    """The default warehouse and two small settings whose optimum is known (the paper's
+    appendix)."""
     return [
         _scenario(
             "default",
@@ -196,10 +207,11 @@ def _appendix() -> list[Scenario]:
 
 #: Every scenario by name.
 SCENARIOS: Mapping[str, Scenario] = MappingProxyType(
-    {s.name: s for s in (*_appendix(), *_table1(), *_table2())}
+    {s.name: s for s in (*_basics(), *_warehouses_60x60(), *_large_grids())}
 )
 
-#: Table I's rows as ``rtaw-eval row=NAME`` configs: row name -> scenario name.
+#: The 60x60 warehouses as ``rtaw-eval row=NAME`` configs (a scenario with its shipped
+#: policies; the paper's Table I rows): row name -> scenario name.
 ROWS: Mapping[str, str] = MappingProxyType(
     {
         f"{row}{'' if m == 10 else f'_m{m}'}": f"{stem}_m{m}"

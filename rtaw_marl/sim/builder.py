@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
@@ -22,12 +23,9 @@ from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.options import (
-    AStarConfig,
-    DesignatedTasksConfig,
     DirectConfig,
     LayoutOption,
     NavigatorOption,
-    ShelvesLayoutConfig,
     TaskOption,
     layout_option,
     navigator_option,
@@ -38,15 +36,25 @@ from rtaw_marl.sim.tasks import TaskStream
 __all__ = ["SimFactory", "SimGroups", "SimSpec", "build_sim", "sim_config"]
 
 
+#: The option of each simulator group when none is named: the default warehouse (60x60
+#: shelves, A*, designated tasks). The commands' defaults lists take them from here
+#: (``/setting/default`` in Hydra's ConfigStore), and :class:`SimSpec` builds them.
+DEFAULT_OPTIONS: Mapping[str, str] = MappingProxyType(
+    {"sim": "default", "layout": "shelves", "navigator": "astar", "tasks": "designated"}
+)
+
+
 @dataclass(kw_only=True)
 class SimSpec:
     """Everything that defines a simulator: the ``sim``, ``layout``, ``navigator`` and
     ``tasks`` config groups, typed."""
 
     sim: SimConfig = field(default_factory=SimConfig)
-    layout: LayoutOption = field(default_factory=ShelvesLayoutConfig)
-    navigator: NavigatorOption = field(default_factory=AStarConfig)
-    tasks: TaskOption = field(default_factory=DesignatedTasksConfig)
+    layout: LayoutOption = field(default_factory=lambda: layout_option(DEFAULT_OPTIONS["layout"]))
+    navigator: NavigatorOption = field(
+        default_factory=lambda: navigator_option(DEFAULT_OPTIONS["navigator"])
+    )
+    tasks: TaskOption = field(default_factory=lambda: task_option(DEFAULT_OPTIONS["tasks"]))
 
     @classmethod
     def of(

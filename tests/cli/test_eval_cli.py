@@ -313,8 +313,7 @@ def test_cli_unknown_group_option_lists_available(tmp_path: Path) -> None:
     proc = _cli(["navigator=dijkstra"], tmp_path)
     assert proc.returncode == 2
     assert proc.stderr.strip() == (
-        "error: In 'eval': Could not find 'navigator/dijkstra'; "
-        "available: astar, cbs, direct, pibt, sipp"
+        "error: Could not find 'navigator/dijkstra'; available: astar, cbs, direct, pibt, sipp"
     )
 
 

@@ -47,8 +47,7 @@ def test_nothing_close_adds_no_suggestion(cli) -> None:
     result = cli("eval", "navigator=dijkstra")
     assert result.code == 2
     assert result.err.strip() == (
-        "error: In 'eval': Could not find 'navigator/dijkstra'; "
-        "available: astar, cbs, direct, pibt, sipp"
+        "error: Could not find 'navigator/dijkstra'; available: astar, cbs, direct, pibt, sipp"
     )
 
 
