@@ -7,6 +7,7 @@ Examples::
     rtaw-eval --multirun sim.num_robots=10,100 navigator=direct,astar
     rtaw-eval policy=[mpdm,rbts,checkpoint] checkpoint=[runs/a/best.pt,runs/b/best.pt]
     rtaw-eval policy=[mpdm,rbts,hindsight] compare_to=rbts lower_bound=true
+    rtaw-eval policy=[mpdm,pretrained] pretrained=generalist_plus compare_to=best
     rtaw-eval ... output=runs/big/results.json resume=true   # after a kill: skip finished episodes
 
 Episodes run seed by seed (every policy on a seed, then the next seed), so that a run
@@ -25,6 +26,11 @@ bar only when stderr is a terminal, the ``estimated time`` line always. So
 mean wall time per episode after an untimed warm-up of a few decisions
 (:data:`~rtaw_marl.evaluation.evaluate.WARM_UP_DECISIONS`), so one-time compilation
 is charged to no policy.
+
+``compare_to=best`` compares every policy with the best rule of the setting, chosen
+first on the selection seeds 1000-1019 (:mod:`rtaw_marl.evaluation.best_rule`: the
+strongest rule depends on the setting, and choosing it on the reported seeds would be
+selecting on them); the report's first line names it and every rule's score there.
 """
 
 from __future__ import annotations
@@ -50,8 +56,15 @@ from rtaw_marl.cli.common import (
 from rtaw_marl.config import as_plain
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation import evaluate, format_table, write_json_atomic
+from rtaw_marl.evaluation.best_rule import (
+    BEST,
+    DEFAULT_RULES,
+    SELECTION_SEEDS,
+    BestRule,
+    choose_best_rule,
+)
 from rtaw_marl.evaluation.config import EvalConfig
-from rtaw_marl.evaluation.evaluate import TimeEstimate
+from rtaw_marl.evaluation.evaluate import SimPolicy, TimeEstimate
 from rtaw_marl.evaluation.journal import (
     NOT_SETTING,
     EpisodeJournal,
@@ -65,6 +78,7 @@ from rtaw_marl.evaluation.results_file import results_payload
 from rtaw_marl.evaluation.throughput import throughput_table
 from rtaw_marl.evaluation.tidy import write_episodes_csv
 from rtaw_marl.evaluation.transcript import Transcript, progress_shown, transcript_path
+from rtaw_marl.policies.spec import PolicySpec
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.utils.runs import claim_file
@@ -104,10 +118,13 @@ def _evaluate(
     report.print(f"layout {sim.layout.describe()}")
     names = policy_names(names)
     policies = policies_from_cfg(cfg, names, sim)
-    if cfg.compare_to is not None and cfg.compare_to not in policies:
+    compare_to, chosen = cfg.compare_to, None
+    if compare_to == BEST:
+        compare_to, chosen = _best_rule(cfg, sim, policies, report)
+    if compare_to is not None and compare_to not in policies:
         raise ConfigError(
-            f"compare_to={cfg.compare_to} is not an evaluated policy; "
-            f"evaluated: {', '.join(policies)}"
+            f"compare_to={compare_to} is not an evaluated policy; "
+            f"evaluated: {', '.join(policies)} (or compare_to=best: the best rule here)"
         )
     journal = _journal(cfg, names, output, policies, report)
     todo = sum(journal.get(name, seed) is None for name in policies for seed in seeds)
@@ -130,16 +147,17 @@ def _evaluate(
     finally:
         journal.close()
     bound, bound_time = _lower_bound(cfg, sim, seeds, results, report)
-    report.print(format_table(results, REFERENCE, lower_bound=bound, compare_to=cfg.compare_to))
+    report.print(format_table(results, REFERENCE, lower_bound=bound, compare_to=compare_to))
     if sim.config.episode_mode == "horizon":
         report.print(
             throughput_table(
-                results, sim.num_robots, int(sim.config.horizon or 0), (REFERENCE, cfg.compare_to)
+                results, sim.num_robots, int(sim.config.horizon or 0), (REFERENCE, compare_to)
             )
         )
     payload = results_payload(
-        as_plain(cfg), seeds, results, REFERENCE, cfg.compare_to, bound, bound_time
-    )
+        as_plain(cfg), seeds, results, REFERENCE, compare_to, bound, bound_time,
+        best_rule=None if chosen is None else chosen.as_dict(),
+    )  # fmt: skip
     path = write_json_atomic(output, payload)
     report.print(f"results: {path}")
     report.print(f"episodes: {write_episodes_csv(_csv(output), results, seeds)}")
@@ -177,6 +195,19 @@ def _journal(
                 "were journalled (another sha256): they run again"
             )
     return journal
+
+
+def _best_rule(
+    cfg: EvalConfig, sim: WarehouseSim, policies: dict[str, SimPolicy], report: Transcript
+) -> tuple[str, BestRule]:
+    """``compare_to=best``: the best rule of this setting, chosen on the selection seeds
+    (played first, not journalled) and added to the evaluated policies if missing."""
+    chosen = choose_best_rule(sim, DEFAULT_RULES, SELECTION_SEEDS, cfg.baselines)
+    report.print(chosen.line())
+    if chosen.name not in policies:
+        spec = PolicySpec.rule(chosen.name, cfg.baselines)
+        policies[chosen.name] = spec.build(sim, chosen.name, torch_threads=cfg.torch_threads)
+    return chosen.name, chosen
 
 
 def _interrupted(exc: KeyboardInterrupt, journal: EpisodeJournal) -> Interrupted:

@@ -6,6 +6,7 @@ intervals); :func:`evaluate` plays given policies on given seeds of one simulato
 
 from __future__ import annotations
 
+from rtaw_marl.evaluation.best_rule import SELECTION_SEEDS, BestRule, choose_best_rule
 from rtaw_marl.evaluation.compare import DEFAULT_RULES, Comparison, compare
 from rtaw_marl.evaluation.evaluate import evaluate, run_episode
 from rtaw_marl.evaluation.report import (
@@ -25,9 +26,12 @@ from rtaw_marl.evaluation.stats import (
 
 __all__ = [
     "DEFAULT_RULES",
+    "SELECTION_SEEDS",
+    "BestRule",
     "Comparison",
     "HindsightShare",
     "PairedDiff",
+    "choose_best_rule",
     "compare",
     "comparisons",
     "evaluate",

@@ -14,8 +14,9 @@
 Every policy plays the same seeds (the same tasks and noise), so each comparison is a
 paired difference of total travel delay with a Student t interval
 (:func:`~rtaw_marl.evaluation.stats.paired_difference`): positive percentages mean
-your policy's TTD is lower. ``best`` names the rule of least mean TTD on these seeds:
-the bar to beat in this setting (it depends on the setting).
+your policy's TTD is lower. ``best`` names the bar to beat in this setting (it depends on
+the setting): the rule of least mean TTD on the selection seeds 1000-1019
+(:func:`~rtaw_marl.evaluation.best_rule.choose_best_rule`), never on the seeds reported.
 """
 
 from __future__ import annotations
@@ -26,6 +27,12 @@ from pathlib import Path
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation.best_rule import (
+    DEFAULT_RULES,
+    SELECTION_SEEDS,
+    BestRule,
+    choose_best_rule,
+)
 from rtaw_marl.evaluation.evaluate import SimPolicy, evaluate
 from rtaw_marl.evaluation.report import format_table
 from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
@@ -39,11 +46,6 @@ from rtaw_marl.sim.inputs import seed_list
 
 __all__ = ["DEFAULT_RULES", "Comparison", "compare"]
 
-#: The rules a policy is compared with unless told otherwise: the paper's MPDM and RBTS
-#: and the stronger hand-written rules (a rollout search, a whole-fleet assignment, a
-#: matching of the robots freed together). Which one is best depends on the setting.
-DEFAULT_RULES: tuple[str, ...] = ("mpdm", "rbts", "lookahead", "hungarian", "batch")
-
 
 @dataclass(frozen=True)
 class Comparison:
@@ -56,8 +58,9 @@ class Comparison:
             the rules (every metric of :func:`~rtaw_marl.evaluation.evaluate`).
         diffs: Rule -> the paired TTD difference ``rule - policy`` (positive: the
             policy is better), with its interval, also in percent of the rule's mean.
-        best: The rule of least mean TTD here.
+        best: The bar: the rule of least mean TTD on the selection seeds (``best_rule``).
         confidence: The intervals' confidence level.
+        best_rule: How ``best`` was chosen (every rule's mean on the selection seeds).
     """
 
     label: str
@@ -66,6 +69,7 @@ class Comparison:
     diffs: dict[str, PairedDiff]
     best: str
     confidence: float = 0.95
+    best_rule: BestRule | None = None
 
     def table(self) -> str:
         """A markdown table (TTD, makespan, waits, seconds per episode with intervals)
@@ -96,6 +100,7 @@ def compare(
     label: str | None = None,
     params: BaselinesConfig | None = None,
     confidence: float = 0.95,
+    selection_seeds: Sequence[int] = SELECTION_SEEDS,
 ) -> Comparison:
     """Play ``policy`` and the rules ``against`` on the same seeds of ``setting``.
 
@@ -112,19 +117,28 @@ def compare(
         label: The policy's label; by default its ``name`` or function name.
         params: The rules' parameters (lookahead's horizon, ...); defaults when None.
         confidence: The intervals' confidence level.
+        selection_seeds: The seeds ``best`` is chosen on (the rules ``against`` are
+            played there first), disjoint from ``seeds``.
 
     Returns:
         The :class:`Comparison`.
 
     Raises:
         ConfigError: An unknown scenario or rule (the message lists the valid ones), no
-            rule, a bad seed, a label equal to a rule's, or a policy that is none of the
-            accepted kinds; all before any episode runs.
+            rule, a bad seed, selection seeds that are evaluation seeds or ``seeds``, a
+            label equal to a rule's, or a policy that is none of the accepted kinds; all
+            before any episode runs.
     """
     seeds = seed_list(seeds)
     rules = list(dict.fromkeys(against))
     if not rules:
         raise ConfigError("against must name at least one rule")
+    shared = sorted(set(seed_list(selection_seeds)) & set(seeds))
+    if shared:
+        raise ConfigError(
+            f"seed {shared[0]} is both a selection seed (where the best rule is chosen) "
+            "and a reported seed; give seeds and selection_seeds that do not overlap"
+        )
     played = as_policy(policy, name=label)
     name = label or getattr(played, "name", None) or type(played).__name__
     if name in rules:
@@ -133,13 +147,13 @@ def compare(
     policies = {name: played}
     for rule in rules:
         policies[rule] = make_baseline(rule, params=params)
+    chosen = choose_best_rule(sim, rules, selection_seeds, params)
     results = evaluate(sim, policies, seeds)
     diffs = {
         rule: paired_difference(results[rule]["ttd"], results[name]["ttd"], confidence)
         for rule in rules
     }
-    best = min(rules, key=lambda rule: sum(results[rule]["ttd"]))
-    return Comparison(name, seeds, results, diffs, best, confidence)
+    return Comparison(name, seeds, results, diffs, chosen.name, confidence, chosen)
 
 
 def _spec(setting: Any) -> SimSpec:

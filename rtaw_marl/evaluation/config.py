@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.evaluation.best_rule import BEST, SELECTION_SEEDS
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import seed_list, seed_value
@@ -29,6 +30,10 @@ class EvalConfig(SimGroups):
         seeds: Episode seeds; every policy sees the same tasks for the same seed.
         compare_to: A policy name (among ``policy``'s) every other policy is also
             compared with, besides MPDM: a paired TTD difference with its interval.
+            ``best``: the best rule of the setting, chosen among mpdm, rbts, lookahead,
+            hungarian and batch on the selection seeds 1000-1019 (least mean TTD; most
+            tasks finished in horizon episodes) and evaluated too; the seeds must then
+            avoid 1000-1019.
         lower_bound: Report the assignment lower bound on TTD and each policy's gap to
             it (drain mode only); off by default: it is loose and costly at large sizes.
         output: Where ``results.json`` goes; ``None`` means the Hydra run folder. Each
@@ -69,6 +74,13 @@ class EvalConfig(SimGroups):
             seeds = [seed_value(seeds, "seeds")]
         # Checked here, once: the command uses the list as it is.
         self.seeds = seed_list(seeds, "seeds")
+        shared = sorted(set(self.seeds) & set(SELECTION_SEEDS))
+        if self.compare_to == BEST and shared:
+            raise ConfigError(
+                f"compare_to=best chooses the best rule on seeds {SELECTION_SEEDS[0]}-"
+                f"{SELECTION_SEEDS[-1]}; seed {shared[0]} cannot also be reported: "
+                "evaluate on other seeds (the evaluation seeds are 0-19)"
+            )
 
 
 @dataclass(kw_only=True)

@@ -6,6 +6,7 @@
       "seeds":   [episode seeds],
       "policies": {label: {metric: [one value per seed]}},
       "comparisons": {label: {baseline: paired TTD difference}},
+      "best_rule": {name, metric, scores, seeds}    (compare_to=best only)
       "lower_bound": [per seed] or null,
       "lower_bound_time_s": seconds or null
     }
@@ -60,6 +61,7 @@ def results_payload(
     compare_to: str | None = None,
     lower_bound: Sequence[float] | None = None,
     lower_bound_time_s: float | None = None,
+    best_rule: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The ``results.json`` object of an evaluation.
 
@@ -71,7 +73,11 @@ def results_payload(
         compare_to: A second baseline, or None.
         lower_bound: The TTD lower bound per seed, when computed.
         lower_bound_time_s: What computing it took.
+        best_rule: With ``compare_to=best``, how the bar was chosen
+            (:meth:`~rtaw_marl.evaluation.best_rule.BestRule.as_dict`); stored as
+            ``best_rule``.
     """
+    extra = {} if best_rule is None else {"best_rule": dict(best_rule)}
     return {
         "config": dict(config),
         "seeds": list(seeds),
@@ -79,6 +85,7 @@ def results_payload(
         "lower_bound_time_s": lower_bound_time_s,
         "policies": {name: dict(metrics) for name, metrics in results.items()},
         "comparisons": comparisons(results, reference, compare_to=compare_to),
+        **extra,
     }
 
 

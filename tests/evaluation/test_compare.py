@@ -42,7 +42,9 @@ def test_a_function_is_compared_with_the_rules_on_the_same_seeds() -> None:
     expected = paired_difference(direct["mpdm"]["ttd"], direct["first_queued"]["ttd"])
     assert result.diffs["mpdm"] == expected
     assert result.diffs["mpdm"].pct < 0  # the first queued task is worse than the nearest
-    best = min(("mpdm", "hungarian"), key=lambda r: np.mean(direct[r]["ttd"]))
+    # The bar is chosen on the selection seeds, not on the reported ones.
+    selected = evaluate(sim, {r: policies[r] for r in ("mpdm", "hungarian")}, range(1000, 1020))
+    best = min(("mpdm", "hungarian"), key=lambda r: np.mean(selected[r]["ttd"]))
     assert result.best == best
     table = result.table()
     assert "| first_queued |" in table
