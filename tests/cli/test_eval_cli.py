@@ -219,7 +219,8 @@ def test_compare_to_must_be_evaluated(cli) -> None:
     result = cli("eval", "scenario=poc", "policy=[mpdm,rbts]", "compare_to=random")
     assert result.code == 2
     assert result.err.strip() == (
-        "error: compare_to=random is not an evaluated policy; evaluated: mpdm, rbts"
+        "error: compare_to=random is not an evaluated policy; evaluated: mpdm, rbts "
+        "(or compare_to=best: the best rule here)"
     )
     assert "| policy" not in result.out
 
