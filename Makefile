@@ -33,7 +33,7 @@ demo: $(STAMP)
 		frames=40960 selection.every_frames=20480 output_dir=$(DEMO_RUN)
 	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
 		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
-		'seeds=$${range:0,20}' compare_to=lookahead output=$(DEMO_RUN)/results.json
+		'seeds=$${range:0,20}' compare_to=best output=$(DEMO_RUN)/results.json
 	$(BIN)/rtaw-view navigator=sipp sim.num_tasks=100 policy=[lookahead,pretrained] \
 		pretrained=generalist_plus output=$(DEMO_RUN)/view.html
 
