@@ -27,14 +27,16 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TextIO
 
 from rtaw_marl.errors import ConfigError, DiskFullError
 from rtaw_marl.utils.atomic import disk_full_guard, temp_name
+from rtaw_marl.utils.stale import remove_stale_temps
 
 try:
     import fcntl
@@ -301,12 +303,22 @@ def claim_file(
     *,
     need: int = MIN_FREE_BYTES,
     siblings: Sequence[str] = (),
+    note: Callable[[str], None] | None = None,
 ) -> Iterator[Path]:
     """Hold the output file ``path`` (and what is written beside it) for this run.
 
     The lock is ``.<name>.lock`` beside it, so runs writing other files of the same
     folder do not block each other. ``need`` and ``siblings`` are passed to
-    :func:`check_writable_file`.
+    :func:`check_writable_file`. Once held, the temporaries a killed earlier write of
+    ``path`` or a sibling left (:func:`~rtaw_marl.utils.stale.remove_stale_temps`) are
+    removed: the claim guarantees no live process writes them.
+
+    Args:
+        path: The output file.
+        what: The config key that named it, for messages.
+        need: The free space (bytes) its filesystem must have.
+        siblings: Names of other files the run writes beside it.
+        note: Told which leftovers were removed (default: a ``note:`` line on stderr).
 
     Raises:
         ConfigError: Another running process writes ``path``, or a check of
@@ -315,7 +327,17 @@ def claim_file(
     """
     path = check_writable_file(path, what, need=need, siblings=siblings)
     with _hold(path.with_name(lock_name(path.name)), f"{what}={_short(str(path))}"):
+        removed = [
+            p for name in (path.name, *siblings) for p in remove_stale_temps(path.with_name(name))
+        ]
+        if removed:
+            left = ", ".join(p.name for p in removed)
+            (note or _note)(f"removed what a killed earlier write of {path.name} left: {left}")
         yield path
+
+
+def _note(line: str) -> None:
+    print(f"note: {line}", file=sys.stderr)
 
 
 @contextmanager

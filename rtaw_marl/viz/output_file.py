@@ -22,7 +22,6 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.utils.runs import claim_file
-from rtaw_marl.utils.stale import remove_stale_temps
 
 __all__ = ["claimed_output", "config_inputs", "refuse_inputs", "same_file"]
 
@@ -103,10 +102,6 @@ def claimed_output(
             cannot be written (:func:`~rtaw_marl.utils.runs.check_writable_file`).
     """
     refuse_inputs(output, inputs, what)
-    with claim_file(output, what) as path:
-        # Safe only now: the claim guarantees no live writer of this name exists.
-        removed = remove_stale_temps(path)
-        if removed and progress is not None:
-            names = ", ".join(p.name for p in removed)
-            progress(f"removed what a killed earlier write of {path.name} left: {names}")
+    # The claim also removes what a killed earlier write of this name left.
+    with claim_file(output, what, note=progress or (lambda line: None)) as path:
         yield path
