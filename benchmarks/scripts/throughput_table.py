@@ -32,7 +32,9 @@ def _payload(path: Path) -> dict:
     """A results file, read and checked by the package's one reader (an older file's
     ``config.env`` under today's ``config.sim``)."""
     results = read_results(path)
-    return {"config": results.config, "seeds": results.seeds, "policies": results.policies}
+    # Files written before labels were short say "rtaw:generalist_plus@k32".
+    policies = {name.removeprefix("rtaw:"): v for name, v in results.policies.items()}
+    return {"config": results.config, "seeds": results.seeds, "policies": policies}
 
 
 def main() -> None:
