@@ -15,6 +15,7 @@ import numpy as np
 
 from rtaw_marl.evaluation.stats import mean_ci
 from rtaw_marl.integrations.lorr.config import LORR_DEFAULT
+from rtaw_marl.policies.labels import upgrade_label
 
 __all__ = ["judge_markdown", "rank_agreement"]
 
@@ -47,12 +48,12 @@ def judge_markdown(
         own: An ``rtaw-eval`` results object of the same problem and horizon, or ``None``.
         base: The scheduler the gains are measured against (in both simulators).
     """
-    # Files written before labels were short say "rtaw:generalist_plus@k32": both sides
-    # are matched, and shown, by today's short label.
-    runs = {_short(k): v for k, v in official["runs"].items()}
+    # rtaw-lorr files written before labels were short say "rtaw:generalist_plus@k32"
+    # (rtaw-eval's are upgraded by their reader): matched, and shown, by today's label.
+    runs = {upgrade_label(k): v for k, v in official["runs"].items()}
     steps = int(official["config"]["timesteps"])
     got = {k: float(v["tasks_finished"]) for k, v in runs.items()}
-    own_runs = {_short(k): v for k, v in (own or {}).get("policies", {}).items()}
+    own_runs = (own or {}).get("policies", {})
     own_mean = {k: float(np.mean(v["tasks_finished"])) for k, v in own_runs.items()}
     header = [
         "scheduler", "LoRR: tasks finished", f"vs {LORR_DEFAULT}", f"vs {base}", "timeouts",
@@ -89,11 +90,6 @@ def judge_markdown(
         f"tau over the schedulers in both): {tau:+.2f}.",
     ]
     return "\n".join(lines)
-
-
-def _short(label: str) -> str:
-    """A learned policy's label as the commands write it now (``rtaw:`` was dropped)."""
-    return label.removeprefix("rtaw:")
 
 
 def _gain(values: Mapping[str, float], label: str, base: str) -> str:

@@ -30,11 +30,9 @@ def _label(payload: dict) -> str:
 
 def _payload(path: Path) -> dict:
     """A results file, read and checked by the package's one reader (an older file's
-    ``config.env`` under today's ``config.sim``)."""
+    ``config.env`` and ``rtaw:`` labels under today's names)."""
     results = read_results(path)
-    # Files written before labels were short say "rtaw:generalist_plus@k32".
-    policies = {name.removeprefix("rtaw:"): v for name, v in results.policies.items()}
-    return {"config": results.config, "seeds": results.seeds, "policies": policies}
+    return {"config": results.config, "seeds": results.seeds, "policies": results.policies}
 
 
 def main() -> None:

@@ -8,7 +8,7 @@ import sys
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
@@ -41,6 +41,8 @@ from rtaw_marl.utils.signals import Interrupted, terminate_as_interrupt
 
 __all__ = [
     "SweepFailures",
+    "add_labelled",
+    "check_distinct",
     "hydra_entry",
     "learned_files",
     "policies_from_cfg",
@@ -48,6 +50,9 @@ __all__ = [
     "policy_specs",
     "typed",
 ]
+
+#: A policy entry of a command (a :class:`PolicySpec`, or rtaw-lorr's run spec).
+T = TypeVar("T")
 
 
 def hydra_entry(config_name: str, task: Callable[[DictConfig], Any]) -> Callable[[], None]:
@@ -236,16 +241,16 @@ def policy_specs(cfg: Any, names: list[str]) -> dict[str, PolicySpec]:
     specs: dict[str, PolicySpec] = {}
     for name in names:
         if is_import_spec(name):
-            _add(specs, name.rpartition(":")[2], PolicySpec("import", name))
+            add_labelled(specs, name.rpartition(":")[2], PolicySpec("import", name))
         elif name not in sources:
             if name not in BASELINES:
                 valid = [*BASELINES, *sources, "module:Name"]
                 raise unknown_name("policy", name, valid)
-            _add(specs, name, PolicySpec.rule(name, cfg.baselines))
+            add_labelled(specs, name, PolicySpec.rule(name, cfg.baselines))
         else:
             k = cfg.candidates
             for label, source in _learned(name, sources[name], k).items():
-                _add(specs, label, PolicySpec(name, source, candidates=k))
+                add_labelled(specs, label, PolicySpec(name, source, candidates=k))
     return specs
 
 
@@ -261,11 +266,19 @@ def policies_from_cfg(cfg: Any, names: list[str], sim: WarehouseSim) -> dict[str
     return policies
 
 
-def _add(specs: dict[str, PolicySpec], label: str, spec: PolicySpec) -> None:
-    """Add ``spec`` under ``label``; two policies under one label is an error."""
+def add_labelled(specs: dict[str, T], label: str, spec: T) -> None:
+    """Add ``spec`` under ``label``; two policies under one label is an error (a policy
+    named twice would silently run once)."""
     if label in specs:
         raise ConfigError(f"two policies are labelled {label!r}; each label names one policy")
     specs[label] = spec
+
+
+def check_distinct(option: str, values: list[str]) -> None:
+    """Refuse a ``checkpoint=``/``pretrained=`` list that names one value twice."""
+    twice = sorted({v for v in values if values.count(v) > 1})
+    if twice:
+        raise ConfigError(f"{option}= names {twice[0]!r} twice; each value names one policy")
 
 
 def learned_files(cfg: Any, names: list[str]) -> dict[str, Path]:
@@ -284,9 +297,7 @@ def _learned(option: str, sources: list[str], candidates: int | None) -> dict[st
     ``candidates=K`` (a policy restricted to K candidates is another policy, with its own
     journal entries).
     """
-    twice = sorted({s for s in sources if sources.count(s) > 1})
-    if twice:
-        raise ConfigError(f"{option}= names {twice[0]!r} twice; each value names one policy")
+    check_distinct(option, sources)
     tag = "" if candidates is None else f"@k{candidates}"
     labels = sources if option == "pretrained" else checkpoint_labels(sources)
     return {f"{label}{tag}": source for label, source in zip(labels, sources, strict=True)}

@@ -30,7 +30,14 @@ from typing import Any
 from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
-from rtaw_marl.cli.common import as_list, hydra_entry, policy_names, typed
+from rtaw_marl.cli.common import (
+    add_labelled,
+    as_list,
+    check_distinct,
+    hydra_entry,
+    policy_names,
+    typed,
+)
 from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.integrations.lorr.config import LORR_DEFAULT, LoRRConfig
 from rtaw_marl.integrations.lorr.entry import RunSpec
@@ -191,17 +198,13 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | None]:
 def _add(out: dict[str, RunSpec | None], new: dict[str, RunSpec | None]) -> None:
     """Add schedulers; one named twice is refused (it would silently run once)."""
     for label, spec in new.items():
-        if label in out:
-            raise ConfigError(f"policy names the scheduler {label!r} twice; name each once")
-        out[label] = spec
+        add_labelled(out, label, spec)
 
 
 def _learned(cfg: LoRRConfig, option: str, given: list[str], common: dict[str, Any]) -> dict:
     from rtaw_marl.policies.network import checkpoint_path, load_policy
 
-    twice = sorted({g for g in given if given.count(g) > 1})
-    if twice:
-        raise ConfigError(f"{option}= names {twice[0]!r} twice; each value names one policy")
+    check_distinct(option, given)
     tag = "" if cfg.candidates is None else f"@k{cfg.candidates}"
     out = {}
     for source, label in zip(given, checkpoint_labels(given), strict=True):

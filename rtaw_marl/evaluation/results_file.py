@@ -30,6 +30,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.report import comparisons
+from rtaw_marl.policies.labels import upgrade_label
 from rtaw_marl.sim.inputs import seed_list
 from rtaw_marl.utils.renamed import upgrade_config
 
@@ -143,10 +144,14 @@ def read_results(path: str | Path) -> ResultsFile:
 def upgrade_payload(data: Mapping[str, Any]) -> dict[str, Any]:
     """A loaded results file under today's names: a ``config`` written before the
     simulator's group was renamed (``config.env``) has it as ``config.sim``, in the same
-    place; anything else comes back as it was (a shallow copy)."""
+    place, and a policy labelled before labels were short (``rtaw:generalist_plus``) has
+    today's label (:func:`~rtaw_marl.policies.labels.upgrade_label`); anything else comes
+    back as it was (a shallow copy)."""
     out = dict(data)
     if isinstance(out.get("config"), Mapping):
         out["config"] = upgrade_config(out["config"])
+    if isinstance(out.get("policies"), Mapping):
+        out["policies"] = {upgrade_label(k): v for k, v in out["policies"].items()}
     return out
 
 

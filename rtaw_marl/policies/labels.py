@@ -10,7 +10,17 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-__all__ = ["checkpoint_labels"]
+__all__ = ["OLD_PREFIX", "checkpoint_labels", "upgrade_label"]
+
+#: What learned policies' labels began with before they were short
+#: (``rtaw:generalist_plus@k32``); files written then still say it.
+OLD_PREFIX = "rtaw:"
+
+
+def upgrade_label(label: str) -> str:
+    """A label read from an older file as the commands write it now
+    (``rtaw:generalist_plus@k32`` -> ``generalist_plus@k32``); others unchanged."""
+    return label.removeprefix(OLD_PREFIX)
 
 
 def checkpoint_labels(sources: Sequence[str]) -> list[str]:

@@ -36,6 +36,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -161,17 +162,9 @@ def read_problem(path: str | Path) -> LoRRProblem:
             f"{path}: numTasksReveal x teamSize must be a finite count of at most "
             f"{_INT_MAX} tasks, got {reveal!r} x {team}"
         )
-    stamp = tuple((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in (path, *files.values()))
-    key = (stamp, team, float(reveal))
-    if key not in _CACHE:
-        if len(_CACHE) >= _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = _read_files(path, files, team, float(reveal))
-    return _CACHE[key]
-
-
-_CACHE: dict[tuple, LoRRProblem] = {}
-_CACHE_SIZE = 8
+    # The files' times and sizes are part of the key: a changed file is read again.
+    stamp = tuple((p.stat().st_mtime_ns, p.stat().st_size) for p in (path, *files.values()))
+    return _read_files(path, tuple(files.values()), team, float(reveal), stamp)
 
 
 def _problem_json(path: Path) -> dict[str, Any]:
@@ -209,16 +202,22 @@ def _referenced_file(path: Path, data: dict[str, Any], key: str) -> Path:
     return target
 
 
-def _read_files(path: Path, files: dict[str, Path], team: int, reveal: float) -> LoRRProblem:
-    """Read the map, agents and tasks and check them against each other."""
-    grid = load_layout(files["mapFile"])
-    agents = read_agents(files["agentFile"], grid)
+@lru_cache(maxsize=8)
+def _read_files(
+    path: Path, files: tuple[Path, Path, Path], team: int, reveal: float, stamp: tuple
+) -> LoRRProblem:
+    """Read the map, agents and tasks (``files``, in :data:`_FILES` order) and check them
+    against each other; ``stamp`` (the files' times and sizes) only keys the cache."""
+    del stamp
+    map_file, agent_file, task_file = files
+    grid = load_layout(map_file)
+    agents = read_agents(agent_file, grid)
     if team > len(agents):
         raise TaskFileError(
             f"{path}: teamSize {team} is more than the {len(agents)} start cells of "
-            f"agentFile {files['agentFile'].name}"
+            f"agentFile {agent_file.name}"
         )
-    _check_distinct_starts(agents[:team], files["agentFile"], grid.width)
+    _check_distinct_starts(agents[:team], agent_file, grid.width)
     window = reveal_window(reveal, team)
     if window <= team:
         raise TaskFileError(
@@ -226,13 +225,10 @@ def _read_files(path: Path, files: dict[str, Path], team: int, reveal: float) ->
             f"(the start kit's int(numTasksReveal x teamSize)); this simulator needs at "
             f"least one more task than robots: numTasksReveal >= {(team + 1) / team:.6g}"
         )
-    tasks = read_lorr_tasks(files["taskFile"], grid)
+    tasks = read_lorr_tasks(task_file, grid)
     for array in (agents, tasks):
         array.setflags(write=False)  # shared by every reader of the cache
-    return LoRRProblem(
-        path, files["mapFile"], files["agentFile"], files["taskFile"], team, reveal,
-        grid, agents, tasks,
-    )  # fmt: skip
+    return LoRRProblem(path, map_file, agent_file, task_file, team, reveal, grid, agents, tasks)
 
 
 def _check_distinct_starts(starts: np.ndarray, path: Path, width: int) -> None:

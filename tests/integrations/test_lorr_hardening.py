@@ -45,7 +45,7 @@ def one_line_error(done: subprocess.CompletedProcess[str], message: str) -> None
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["policy=[mpdm,mpdm]"], "policy names the scheduler 'mpdm' twice"),
+        (["policy=[mpdm,mpdm]"], "two policies are labelled 'mpdm'"),
         (["policy=pretrained", "pretrained=[generalist,generalist]"], "names 'generalist' twice"),
         (["timesteps=99999999999"], "timesteps must be <= 2147483647"),
         (["plan_time_ms=10000000000000"], "plan_time_ms must be <= 2147483647"),
