@@ -232,12 +232,16 @@ def policy_specs(cfg: Any, names: list[str]) -> dict[str, PolicySpec]:
             unknown rule, or two policies under one label.
     """
     names = policy_names(names)
+    search = getattr(cfg, "search", None)  # rtaw-view and rtaw-lorr do not search
     sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}
+    if search is not None:
+        sources["search"] = as_list(search.policy)
     for option in sources:
+        key = "search.policy" if option == "search" else option
         if option in names and not sources[option]:
-            raise ConfigError(f"policy={option} needs {option}=... (one value or a list)")
+            raise ConfigError(f"policy={option} needs {key}=... (one value or a list)")
         if sources[option] and option not in names:
-            raise ConfigError(f"{option}=... given but policy does not include '{option}'")
+            raise ConfigError(f"{key}=... given but policy does not include '{option}'")
     specs: dict[str, PolicySpec] = {}
     for name in names:
         if is_import_spec(name):
@@ -249,8 +253,9 @@ def policy_specs(cfg: Any, names: list[str]) -> dict[str, PolicySpec]:
             add_labelled(specs, name, PolicySpec.rule(name, cfg.baselines))
         else:
             k = cfg.candidates
+            params = () if name != "search" else _search_params(search)
             for label, source in _learned(name, sources[name], k).items():
-                add_labelled(specs, label, PolicySpec(name, source, candidates=k))
+                add_labelled(specs, label, PolicySpec(name, source, params, candidates=k))
     return specs
 
 
@@ -297,10 +302,17 @@ def _learned(option: str, sources: list[str], candidates: int | None) -> dict[st
     ``candidates=K`` (a policy restricted to K candidates is another policy, with its own
     journal entries).
     """
-    check_distinct(option, sources)
+    check_distinct("search.policy" if option == "search" else option, sources)
     tag = "" if candidates is None else f"@k{candidates}"
     labels = sources if option == "pretrained" else checkpoint_labels(sources)
+    if option == "search":
+        tag += "+search"
     return {f"{label}{tag}": source for label, source in zip(labels, sources, strict=True)}
+
+
+def _search_params(search: Any) -> tuple[tuple[str, Any], ...]:
+    """A ``search`` section's ``(key, value)`` pairs for :class:`PolicySpec`."""
+    return tuple(sorted((k, getattr(search, k)) for k in ("horizon", "leaf", "width")))
 
 
 def as_list(value: object) -> list[str]:

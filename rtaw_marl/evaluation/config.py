@@ -8,7 +8,7 @@ from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.evaluation.best_rule import BEST, SELECTION_SEEDS
-from rtaw_marl.policies.config import BaselinesConfig
+from rtaw_marl.policies.config import BaselinesConfig, SearchConfig
 from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import seed_list, seed_value
 from rtaw_marl.utils.checks import at_least, check_fields
@@ -22,9 +22,10 @@ class EvalConfig(SimGroups):
 
     Attributes:
         policy: Policies to evaluate, by name (one or a list): ``mpdm``, ``rbts``,
-            ``random``, ``lookahead``, ``hungarian``, ``hindsight`` (a reference that
-            knows the future), ``checkpoint`` (trained files) and ``pretrained`` (shipped
-            policies; ``rtaw`` is its deprecated name).
+            ``random``, ``lookahead``, ``hungarian``, ``batch``, ``hindsight`` (a
+            reference that knows the future), ``checkpoint`` (trained files),
+            ``pretrained`` (shipped policies; ``rtaw`` is its deprecated name) and
+            ``search`` (learned policies searched at decision time, ``search.policy``).
         checkpoint: Checkpoint path(s) evaluated when ``policy`` includes ``checkpoint``.
         pretrained: Shipped policy name(s) evaluated when ``policy`` includes ``pretrained``.
         seeds: Episode seeds; every policy sees the same tasks for the same seed.
@@ -46,6 +47,8 @@ class EvalConfig(SimGroups):
             nearest the free robot when the queue holds more (a decision then costs
             ``O(K)`` network work); ``None``: every queued task.
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
+        search: ``policy=search``: the learned policies searched at decision time
+            (``search.policy``) and the search's width, horizon and leaf weight.
     """
 
     policy: Any = field(default_factory=lambda: ["mpdm", "rbts", "random"])
@@ -60,6 +63,7 @@ class EvalConfig(SimGroups):
     torch_threads: int = 1
     candidates: int | None = None
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
+    search: SearchConfig = field(default_factory=SearchConfig)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -89,7 +93,7 @@ class RenderConfig(SimGroups):
 
     Attributes:
         policy: One policy: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``,
-            ``checkpoint`` or ``pretrained``.
+            ``checkpoint``, ``pretrained`` or ``search``.
         checkpoint: The checkpoint path when ``policy=checkpoint``.
         pretrained: The shipped policy name when ``policy=pretrained``.
         seed: Episode seed.
@@ -107,6 +111,8 @@ class RenderConfig(SimGroups):
             nearest the free robot when the queue holds more (a decision then costs
             ``O(K)`` network work); ``None``: every queued task.
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
+        search: ``policy=search``: the learned policies searched at decision time
+            (``search.policy``) and the search's width, horizon and leaf weight.
     """
 
     policy: str = "mpdm"
@@ -123,6 +129,7 @@ class RenderConfig(SimGroups):
     torch_threads: int = 1
     candidates: int | None = None
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
+    search: SearchConfig = field(default_factory=SearchConfig)
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -156,6 +163,8 @@ class ViewConfig(SimGroups):
         candidates: Learned policies score only the ``K`` queued tasks whose origins are
             nearest the free robot when the queue holds more; ``None``: every one.
         baselines: Parameters of the rules (``lookahead`` and ``hindsight`` horizons).
+        search: ``policy=search``: the learned policies searched at decision time
+            (``search.policy``) and the search's width, horizon and leaf weight.
     """
 
     policy: Any = "mpdm"
@@ -168,6 +177,7 @@ class ViewConfig(SimGroups):
     torch_threads: int = 1
     candidates: int | None = None
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
+    search: SearchConfig = field(default_factory=SearchConfig)
 
     def __post_init__(self) -> None:
         check_fields(self)

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.utils.checks import check_fields
 
-__all__ = ["BaselinesConfig"]
+__all__ = ["BaselinesConfig", "SearchConfig"]
 
 
 @dataclass(kw_only=True)
@@ -49,3 +50,37 @@ class BaselinesConfig:
             raise ConfigError(f"baselines.lookahead_candidates must be an integer >= 1, got {k!r}")
         if not self.batch_penalty >= 0:
             raise ConfigError(f"baselines.batch_penalty must be >= 0, got {self.batch_penalty!r}")
+
+
+@dataclass(kw_only=True)
+class SearchConfig:
+    """``policy=search``: learned policies searched at decision time (the ``search``
+    config section; :mod:`rtaw_marl.policies.search`).
+
+    Each tried slot is given to the free robot and rolled forward ``horizon`` decisions
+    on the current queue with the network choosing; the cheapest rollout wins. The
+    defaults were chosen on the selection seeds (docs/results.md, "Search").
+
+    Attributes:
+        policy: The learned policies searched: checkpoint paths or shipped names (one or
+            a list), each labelled ``<name>+search``.
+        width: Slots tried per decision: the network's best ``width``.
+        horizon: Decisions rolled out after each tried slot's, the network choosing.
+        leaf: Weight of the critic's value of each rollout's final state (0: none).
+    """
+
+    policy: Any = None
+    width: int = 4
+    horizon: int = 3
+    leaf: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_fields(self, "search.")
+        for key, low in (("width", 1), ("horizon", 0)):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise ConfigError(f"search.{key} must be an integer >= {low}, got {value!r}")
+        leaf = self.leaf
+        if isinstance(leaf, bool) or not isinstance(leaf, (int, float)) or not 0 <= leaf < 1e9:
+            raise ConfigError(f"search.leaf must be a number >= 0, got {leaf!r}")
+        self.leaf = float(leaf)

@@ -2,7 +2,8 @@
 
 A :class:`PolicySpec` names a policy without building it (it pickles to worker
 processes and records in journals): a rule by name with its parameters, a shipped
-learned policy, a checkpoint file, or a user's ``module:Name``. ``rtaw-eval``,
+learned policy, a checkpoint file, either searched at decision time (``search``), or a
+user's ``module:Name``. ``rtaw-eval``,
 ``rtaw-render``, ``rtaw-view`` and the benchmarks project all resolve their policies
 through it.
 """
@@ -20,9 +21,9 @@ from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["KINDS", "PolicySpec"]
 
-Kind = Literal["rule", "pretrained", "checkpoint", "import"]
+Kind = Literal["rule", "pretrained", "checkpoint", "search", "import"]
 #: The kinds of policy a label can stand for.
-KINDS: tuple[Kind, ...] = ("rule", "pretrained", "checkpoint", "import")
+KINDS: tuple[Kind, ...] = ("rule", "pretrained", "checkpoint", "search", "import")
 
 
 @dataclass(frozen=True)
@@ -31,11 +32,14 @@ class PolicySpec:
 
     Attributes:
         kind: ``"rule"`` (:data:`~rtaw_marl.policies.BASELINES`), ``"pretrained"`` (a
-            shipped policy), ``"checkpoint"`` (a file, or a shipped name) or
-            ``"import"`` (``module:Name``, :mod:`rtaw_marl.policies.user`).
+            shipped policy), ``"checkpoint"`` (a file, or a shipped name), ``"search"``
+            (a file or shipped name searched at decision time,
+            :mod:`rtaw_marl.policies.search`) or ``"import"`` (``module:Name``,
+            :mod:`rtaw_marl.policies.user`).
         name: The rule's or shipped policy's name, the checkpoint path, or the spec.
         params: A rule's parameters (:class:`~rtaw_marl.policies.BaselinesConfig`
-            keys) as sorted ``(key, value)`` pairs.
+            keys), or a search's (``width``, ``horizon``, ``leaf``), as sorted
+            ``(key, value)`` pairs.
         candidates: A learned policy's ``candidates=K`` (``None``: every queued task).
     """
 
@@ -83,6 +87,13 @@ class PolicySpec:
             return make_baseline(self.name, env=sim, params=params)
         if self.kind == "import":
             return import_policy(self.name)[1]
+        if self.kind == "search":
+            from rtaw_marl.policies.search_policy import load_search  # torch
+
+            return load_search(
+                self.name, **dict(self.params), name=label, torch_threads=torch_threads,
+                candidates=self.candidates,
+            )  # fmt: skip
         from rtaw_marl.policies.network import load_policy  # torch: only when needed
 
         # A checkpoint= value is a file or a shipped name: load_policy says which is wrong.
@@ -108,7 +119,7 @@ class PolicySpec:
             return None
         from rtaw_marl.policies.pretrained.registry import pretrained_path
 
-        if self.kind == "checkpoint":
+        if self.kind in ("checkpoint", "search"):
             # A checkpoint= value that is no file is a shipped name (load_policy's rule).
             path = Path(self.name)
             return path if path.is_file() else pretrained_path(self.name)
