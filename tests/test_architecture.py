@@ -165,7 +165,7 @@ ENV_PATH = (
 )  # fmt: skip
 NEEDS_EXTRA = (
     "envs/torchrl.py", "envs/torchrl_wrapper.py", "envs/mixed.py", "policies/network.py",
-    "policies/export.py", "policies/export_check.py",
+    "policies/export.py", "policies/export_check.py", "policies/search_policy.py",
 )  # fmt: skip
 
 

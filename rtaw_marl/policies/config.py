@@ -59,7 +59,8 @@ class SearchConfig:
 
     Each tried slot is given to the free robot and rolled forward ``horizon`` decisions
     on the current queue with the network choosing; the cheapest rollout wins. The
-    defaults were chosen on the selection seeds (docs/results.md, "Search").
+    defaults were chosen on the selection seeds (``python -m
+    benchmarks.scripts.search_defaults``, docs/training.md "Search").
 
     Attributes:
         policy: The learned policies searched: checkpoint paths or shipped names (one or
@@ -70,7 +71,7 @@ class SearchConfig:
     """
 
     policy: Any = None
-    width: int = 4
+    width: int = 2
     horizon: int = 3
     leaf: float = 0.0
 

@@ -11,7 +11,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
+
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    import torch
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.decision.features import candidate_slots, sim_observation
 from rtaw_marl.models.checkpoint import Critic, load_checkpoint, load_networks
@@ -29,9 +37,9 @@ __all__ = ["SearchPolicy", "load_search"]
 def load_search(
     source: str | Path,
     *,
-    width: int = 4,
-    horizon: int = 3,
-    leaf: float = 0.0,
+    width: int = SearchConfig.width,
+    horizon: int = SearchConfig.horizon,
+    leaf: float = SearchConfig.leaf,
     name: str | None = None,
     torch_threads: int | None = 1,
     candidates: int | None = None,
@@ -89,9 +97,9 @@ class SearchPolicy:
         self,
         network: NetworkPolicy,
         *,
-        width: int = 4,
-        horizon: int = 3,
-        leaf: float = 0.0,
+        width: int = SearchConfig.width,
+        horizon: int = SearchConfig.horizon,
+        leaf: float = SearchConfig.leaf,
         critic: Critic | None = None,
         reward_scale: float | None = None,
     ) -> None:

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtaw_marl.errors import ConfigError
+from rtaw_marl.policies.config import SearchConfig
 from rtaw_marl.sim.builder import SimGroups
 from rtaw_marl.sim.inputs import SELECTION_SEEDS, seed_list, seed_value
 from rtaw_marl.training.loggers.config import logger_option
@@ -40,8 +41,9 @@ DEVICES = ("auto", "cpu", "cuda")
 #: The largest ``frames``: steps are logged as floats, exact up to 2**53.
 MAX_FRAMES = 2**53
 
-#: Rules an imitation warm start can learn from.
-TEACHERS = ("lookahead", "hindsight")
+#: What an imitation warm start can learn from: two rules, or ``search`` with a
+#: network (by default the one being trained: expert iteration).
+TEACHERS = ("lookahead", "hindsight", "search")
 
 
 @dataclass(kw_only=True)
@@ -230,14 +232,19 @@ class ImitationConfig:
     :mod:`rtaw_marl.training.imitation`).
 
     Attributes:
-        teacher: ``lookahead`` or ``hindsight`` (the ``baselines`` defaults' horizons);
-            ``None``: no warm start.
+        teacher: ``lookahead`` or ``hindsight`` (the ``baselines`` defaults' horizons),
+            or ``search``: the search of :mod:`rtaw_marl.policies.search` over the
+            network being trained, as it is at each round's start (expert iteration:
+            each round's search is guided by the previous round's network), or over
+            the fixed ``imitation.search.policy`` when set; ``None``: no warm start.
         frames: Teacher-labelled decisions in all rounds together (not counted in
             ``frames``, which counts PPO's).
         rounds: Round 0 follows the teacher; rounds 1.. follow the student (DAgger).
         epochs: Passes over everything labelled so far after each round.
         minibatch_size: Decisions per gradient step.
         lr: Adam learning rate of the warm start.
+        search: The search teacher's width, horizon and leaf weight (and the network
+            it searches, when not the one being trained).
     """
 
     teacher: str | None = None
@@ -246,6 +253,7 @@ class ImitationConfig:
     epochs: int = 4
     minibatch_size: int = 1024
     lr: float = 1.0e-3
+    search: SearchConfig = field(default_factory=SearchConfig)
 
     def __post_init__(self) -> None:
         check_fields(self, "imitation.")

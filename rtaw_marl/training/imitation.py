@@ -1,6 +1,6 @@
 """A warm start by imitation: behaviour cloning of a rule, then DAgger, before PPO.
 
-Round 0 follows the teacher (``lookahead`` or ``hindsight``) on the batched simulators
+Round 0 follows the teacher (``lookahead``, ``hindsight`` or ``search``) on the batched simulators
 and records the policy's observations with the teacher's choice; each later round lets
 the *student* (the actor, greedy) drive, so the states are the student's own, still
 labelled by the teacher (DAgger with beta = 0 after the first round). After every round
@@ -10,11 +10,15 @@ critic that knows the warm-started policy's values.
 
 The teacher acts on the simulators themselves (``act_sim``): ``hindsight`` sees the real
 future, which no online policy can; imitating it teaches the choices that pay off on
-average given what the observation shows.
+average given what the observation shows. ``search`` is expert iteration: each round's
+teacher is the search (:mod:`rtaw_marl.policies.search`) over the network as it is at
+the round's start, an online policy stronger than the network alone, so the network
+learns what its own search would choose and the next round's search starts stronger.
 """
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -35,7 +39,9 @@ from rtaw_marl.envs.torchrl import BatchedWarehouseEnv
 from rtaw_marl.models.actor_critic import greedy_action
 from rtaw_marl.models.checkpoint import Actor, Critic
 from rtaw_marl.policies import BaselinePolicy, Hindsight, make_baseline
-from rtaw_marl.policies.config import BaselinesConfig
+from rtaw_marl.policies.config import BaselinesConfig, SearchConfig
+from rtaw_marl.policies.network import NetworkPolicy
+from rtaw_marl.policies.search_policy import SearchPolicy, load_search
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.config import ImitationConfig
 
@@ -83,8 +89,7 @@ def imitate(
         student already chose the teacher's task in the states it drove into), the
         fitted ``accuracy`` and ``loss``.
     """
-    teacher = make_baseline(cfg.teacher, params=BaselinesConfig())
-    teacher.reset(seed)  # its ties are broken by the run's seed, as everything else
+    rule = None if cfg.teacher == "search" else make_baseline(cfg.teacher, params=BaselinesConfig())
     keys = tuple(dict.fromkeys((*actor.in_keys, *critic.in_keys)))
     if mix:
         share = num_envs // len(mix)
@@ -96,6 +101,8 @@ def imitate(
     rounds: list[_Round] = []
     rows = []
     for r in range(cfg.rounds):
+        teacher = rule or _search_teacher(cfg.search, actor, critic, None if mix else reward_scale)
+        teacher.reset(seed)  # its ties are broken by the run's seed, as everything else
         data, agreement = _collect(env, teacher, actor, keys, steps, student=r > 0)
         if r > 0:  # the critic learns the student's values, not the teacher's
             data.returns = _returns(data.observations, gamma, reward_scale)
@@ -106,10 +113,28 @@ def imitate(
     return rows
 
 
+def _search_teacher(
+    cfg: SearchConfig, actor: Actor, critic: Critic, reward_scale: float | None
+) -> SearchPolicy:
+    """The search over ``cfg.policy``, or else over a frozen copy of the network being
+    trained (this round's: expert iteration); ``reward_scale`` reads the critic's value
+    in cells (``None``: a mix's rewards, in units of each member's ``L``)."""
+    if cfg.policy is not None:
+        return load_search(
+            str(cfg.policy), width=cfg.width, horizon=cfg.horizon, leaf=cfg.leaf,
+            torch_threads=None,
+        )  # fmt: skip
+    network = NetworkPolicy(copy.deepcopy(actor), name="search")
+    return SearchPolicy(
+        network, width=cfg.width, horizon=cfg.horizon, leaf=cfg.leaf,
+        critic=copy.deepcopy(critic) if cfg.leaf > 0 else None, reward_scale=reward_scale,
+    )  # fmt: skip
+
+
 @torch.no_grad()
 def _collect(
     env: BatchedWarehouseEnv,
-    teacher: BaselinePolicy | Hindsight,
+    teacher: BaselinePolicy | Hindsight | SearchPolicy,
     actor: Actor,
     keys: tuple[str, ...],
     steps: int,

@@ -486,6 +486,43 @@ def test_candidates_restrict_learned_policies_under_their_own_label(tmp_path: Pa
     assert "Traceback" not in bad.err
 
 
+def test_search_over_a_learned_policy_runs_under_its_own_label(tmp_path: Path, cli) -> None:
+    """``policy=search search.policy=NAME`` evaluates NAME searched at decision time,
+    labelled ``NAME+search`` beside the plain network, with its options recorded."""
+    out = tmp_path / "s.json"
+    result = cli(
+        "eval", "scenario=poc", "policy=[pretrained,search]", "pretrained=shelves_astar_m10_plus",
+        "search.policy=shelves_astar_m10_plus", "search.width=3", "search.horizon=2",
+        "seeds=[0,1]", "progress=false", f"output={out}",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    data = json.loads(out.read_text())
+    assert list(data["policies"]) == ["shelves_astar_m10_plus", "shelves_astar_m10_plus+search"]
+    assert data["config"]["search"] == {
+        "policy": "shelves_astar_m10_plus", "width": 3, "horizon": 2, "leaf": 0.0,
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["policy=search"], "policy=search needs search.policy=... (one value or a list)"),
+        (["search.policy=generalist_plus"], "search.policy=... given but policy does not include"),
+        (["policy=search", "search.policy=nope"], "'nope' is neither a checkpoint file nor"),
+        (["policy=search", "search.policy=[A_astar_m10,A_astar_m10]"], "names 'A_astar_m10' twice"),
+        (["policy=search", "search.policy=A_astar_m10", "search.width=0"], "search.width must be"),
+        (["policy=search", "search.policy=A_astar_m10", "search.leaf=-1"], "search.leaf must be"),
+        (["policy=search", "search.policy=A_astar_m10", "search.depth=3"], "search.depth"),
+    ],
+)
+def test_bad_search_is_one_line(cli, args: list[str], message: str) -> None:
+    result = cli("eval", "scenario=poc", "progress=false", *args)
+    assert result.code == 2
+    assert message in result.err
+    assert "Traceback" not in result.err
+    assert len(result.err.strip().splitlines()) <= 2  # the layout line, then the error
+
+
 # --------------------------------------------------------------------------- your policy
 USER_MODULE = """
 import numpy as np
