@@ -13,8 +13,10 @@ model (``rtaw``, ``rtaw_plus``; untrained weights: latency does not depend on th
 script plays MPDM along one episode and, at every decision, times the learned policy's
 observation features (``sim_observation``), its network on the path ``act_sim`` takes
 (RTAW+: a frozen TorchScript trace), the whole greedy ``act_sim``, MPDM's and
-``lookahead``'s ``act_sim``. Prints median milliseconds per decision (the best of 3
-timings of each) and the ratios to MPDM and lookahead. torch runs on one thread.
+``lookahead``'s ``act_sim``, and ``policy=search`` over RTAW+ (its default width and
+horizon) beside ``lookahead`` and ``hungarian``. Prints median milliseconds per decision
+(the best of 3 timings of each) and the ratios to MPDM and lookahead. torch runs on one
+thread.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from rtaw_marl.models.checkpoint import build_networks
 from rtaw_marl.models.config import RTAWConfig, RTAWPlusConfig
 from rtaw_marl.policies import MPDM, make_baseline
 from rtaw_marl.policies.network import NetworkPolicy
+from rtaw_marl.policies.search_policy import SearchPolicy
 from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.core import WarehouseSim
 
@@ -67,6 +70,11 @@ def measure(m: int, decisions: int, layout: dict) -> dict[str, dict[str, float]]
     }
     rule: list[float] = []
     ahead: list[float] = []
+    # policy=search over RTAW+ with its defaults, and hungarian: the rules it must match.
+    search = SearchPolicy(policies["rtaw_plus"])
+    hungarian = make_baseline("hungarian")
+    searched: list[float] = []
+    matched: list[float] = []
     while not sim.done:
         for name, policy in policies.items():
             keys = policy.net.in_keys
@@ -77,10 +85,14 @@ def measure(m: int, decisions: int, layout: dict) -> dict[str, dict[str, float]]
             times[name]["total"].append(_ms(lambda p=policy: p.act_sim(sim)))
         rule.append(_ms(lambda: mpdm.act_sim(sim)))
         ahead.append(_ms(lambda: lookahead.act_sim(sim)))
+        searched.append(_ms(lambda: search.act_sim(sim)))
+        matched.append(_ms(lambda: hungarian.act_sim(sim)))
         sim.step(mpdm.act_sim(sim))
     out = {name: {k: float(np.median(v)) for k, v in t.items()} for name, t in times.items()}
     out["mpdm"] = {"total": float(np.median(rule))}
     out["lookahead"] = {"total": float(np.median(ahead))}
+    out["search"] = {"total": float(np.median(searched))}
+    out["hungarian"] = {"total": float(np.median(matched))}
     return out
 
 
@@ -104,14 +116,26 @@ def main() -> None:
         "lookahead ms | total / MPDM | total / lookahead |"
     )
     print("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|")
+    search_rows = []
     for m, label, layout in rows:
         res = measure(m, decisions, layout)
+        search_rows.append((label, m, res))
         rule, ahead = res["mpdm"]["total"], res["lookahead"]["total"]
         for name in ("rtaw", "rtaw_plus"):
             r = res[name]
             print(f"| {label} | {m} | 10 | {name} | {r['features']:.3f} | {r['network']:.3f} | "
                   f"{r['total']:.3f} | {rule:.3f} | {ahead:.3f} | {r['total'] / rule:.0f}x | "
                   f"{r['total'] / ahead:.2f}x |", flush=True)  # fmt: skip
+    print("\npolicy=search (RTAW+, its default width and horizon) against the rules:\n")
+    print("| layout | M | N | search ms | lookahead ms | hungarian ms | search / lookahead |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for label, m, res in search_rows:
+        t, ahead, hung = (
+            res["search"]["total"],
+            res["lookahead"]["total"],
+            res["hungarian"]["total"],
+        )
+        print(f"| {label} | {m} | 10 | {t:.3f} | {ahead:.3f} | {hung:.3f} | {t / ahead:.2f}x |")
 
 
 if __name__ == "__main__":

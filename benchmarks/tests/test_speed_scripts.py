@@ -41,3 +41,13 @@ def test_bench_wrapper_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     report = bench_wrapper.render(rows, quick=True)
     assert "| warehouse | vectorised | compact | flat | 10 |" in report
     assert "x |" in report  # the speed-up column, vectorised over stock
+
+
+def test_bench_policy_latency_times_the_search_beside_the_rules() -> None:
+    """One row of ``bench_policy_latency``: every phase and policy has a median."""
+    from benchmarks.scripts import bench_policy_latency
+
+    res = bench_policy_latency.measure(10, 4, {"name": "preset", "preset": "C", "width": 30,
+                                               "height": 30})  # fmt: skip
+    assert set(res) == {"rtaw", "rtaw_plus", "mpdm", "lookahead", "search", "hungarian"}
+    assert all(v > 0 for r in res.values() for v in r.values())
