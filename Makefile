@@ -23,16 +23,18 @@ SOURCES := rtaw_marl tests benchmarks
 
 DEMO_RUN := runs/demo
 
-# Train RTAW+ briefly (a lookahead warm start, then PPO), then compare it and the shipped
-# generalist RTAW+ (one policy for every scenario) with MPDM, RBTS and lookahead on 20
+# Train RTAW+ briefly (a lookahead warm start, then PPO), then compare it, the shipped
+# generalist RTAW+ (one policy for every scenario) and the generalist searched at decision
+# time (policy=search) with MPDM, RBTS, lookahead and the best rule of the setting on 20
 # evaluation seeds of the default scenario; then a page to explore the generalist and
 # lookahead side by side, executed collision-free (open runs/demo/view.html).
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
 	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
 		frames=40960 selection.every_frames=20480 output_dir=$(DEMO_RUN)
-	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,checkpoint] \
-		pretrained=generalist_plus checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
+	$(BIN)/rtaw-eval policy=[mpdm,rbts,lookahead,pretrained,search,checkpoint] \
+		pretrained=generalist_plus search.policy=generalist_plus \
+		checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=best output=$(DEMO_RUN)/results.json
 	$(BIN)/rtaw-view navigator=sipp sim.num_tasks=100 policy=[lookahead,pretrained] \
 		pretrained=generalist_plus output=$(DEMO_RUN)/view.html

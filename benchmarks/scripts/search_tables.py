@@ -6,6 +6,7 @@ Usage::
     python -m benchmarks.scripts.search_tables table2 default holdout
     python -m benchmarks.scripts.search_tables holdout --network runs/x/best.pt --only M=3
     python -m benchmarks.scripts.search_tables table1 --render   # the tables from the data
+    python -m benchmarks.scripts.search_tables table1 --render --write   # ... into docs/results.md
 
 For each row: the best rule is chosen among
 :data:`~rtaw_marl.evaluation.best_rule.DEFAULT_RULES` on the selection seeds 1000-1019
@@ -31,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.study import replace_section
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.best_rule import DEFAULT_RULES, choose_best_rule
 from rtaw_marl.evaluation.report import markdown_table
@@ -185,6 +187,9 @@ def main() -> None:
     parser.add_argument("--only", default=None, help="rows whose key contains this")
     parser.add_argument("--again", action="store_true", help="rerun rows already stored")
     parser.add_argument("--render", action="store_true", help="print the stored tables only")
+    parser.add_argument(
+        "--write", action="store_true", help="also rewrite docs/results.md's search_<part> section"
+    )
     args = parser.parse_args()
     for part in args.parts:
         path = DATA / f"search_{part}.json"
@@ -205,7 +210,10 @@ def main() -> None:
             atomic_write(path, lambda f, t=text: f.write(t.encode()))
         order = [k for k in PARTS[part]() if k in rows]
         if order:
-            print(f"\n## {part}\n\n" + render(part, {k: rows[k] for k in order}))
+            text = render(part, {k: rows[k] for k in order})
+            print(f"\n## {part}\n\n{text}")
+            if args.write:
+                replace_section(ROOT / "docs" / "results.md", f"search_{part}", text)
 
 
 if __name__ == "__main__":
