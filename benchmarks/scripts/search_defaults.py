@@ -2,7 +2,9 @@
 
 Usage::
 
-    python -m benchmarks.scripts.search_defaults                       # generalist_plus
+    python -m benchmarks.scripts.search_defaults --grid wide           # generalist_plus
+    python -m benchmarks.scripts.search_defaults --grid narrow         # then these
+    python -m benchmarks.scripts.search_defaults --grid leaf
     python -m benchmarks.scripts.search_defaults --policy runs/x/checkpoints/best.pt
     python -m benchmarks.scripts.search_defaults --quick               # 2 settings, 5 seeds
 
@@ -12,7 +14,7 @@ members, :func:`rtaw_marl.scenarios.mix.member_spec`) over the selection seeds
 per setting each variant's paired TTD difference against the network alone (positive:
 the search is better) and ms per decision, then the pooled difference; the variant with
 the best pooled gain is the default. Per-seed values go to
-``benchmarks/data/search_defaults.json``.
+``benchmarks/data/search_defaults_<grid>.json``.
 """
 
 from __future__ import annotations
@@ -33,11 +35,18 @@ from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.utils.atomic import atomic_write
 
 ROOT = Path(__file__).resolve().parents[2]
-OUT = ROOT / "benchmarks" / "data" / "search_defaults.json"
+OUT = ROOT / "benchmarks" / "data" / "search_defaults.json"  # _<grid> added
 #: Settings: small and large fleets, queues 5 and 10, both modes, four layouts.
 SETTINGS = ("C_astar_m10", "A_astar_m100:paper", "E_astar_m100:n5", "D_astar_m10:m50:paper")
-#: (width, horizon, leaf) variants.
-GRID = ((2, 1, 0.0), (2, 2, 0.0), (2, 3, 0.0), (2, 5, 0.0), (3, 3, 0.0), (2, 3, 0.5), (2, 3, 1.0))
+#: (width, horizon, leaf) variants of each grid, run in this order: the widths and
+#: horizons first, then narrower ones around the first run's best, then the critic's
+#: weight at the chosen width and horizon.
+GRIDS = {
+    "wide": ((2, 3, 0.0), (4, 1, 0.0), (4, 3, 0.0), (4, 5, 0.0), (8, 3, 0.0), (4, 3, 0.5)),
+    "narrow": ((2, 1, 0.0), (2, 2, 0.0), (2, 3, 0.0), (2, 5, 0.0), (3, 3, 0.0), (2, 3, 0.5),
+               (2, 3, 1.0)),
+    "leaf": ((2, 3, 0.0), (2, 3, 0.02), (2, 3, 0.05), (2, 3, 0.1), (2, 3, 0.2)),
+}  # fmt: skip
 
 
 def label(width: int, horizon: int, leaf: float) -> str:
@@ -45,11 +54,13 @@ def label(width: int, horizon: int, leaf: float) -> str:
     return f"w{width} h{horizon}" + (f" leaf{leaf:g}" if leaf else "")
 
 
-def run_setting(policy: str, setting: str, seeds: list[int]) -> dict[str, dict[str, list[float]]]:
+def run_setting(
+    policy: str, setting: str, seeds: list[int], grid: tuple[tuple[int, int, float], ...]
+) -> dict[str, dict[str, list[float]]]:
     """Per-seed TTD and wall time of the network, lookahead and every variant."""
     sim = build_sim(member_spec(setting))
     policies = {"network": load_policy(policy), "lookahead": make_baseline("lookahead")}
-    for width, horizon, leaf in GRID:
+    for width, horizon, leaf in grid:
         policies[label(width, horizon, leaf)] = load_search(
             policy, width=width, horizon=horizon, leaf=leaf
         )
@@ -88,20 +99,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--policy", default="generalist_plus")
     parser.add_argument("--quick", action="store_true", help="2 settings, 5 seeds")
-    parser.add_argument("--output", type=Path, default=OUT)
+    parser.add_argument("--grid", choices=list(GRIDS), default="narrow")
+    parser.add_argument("--output", type=Path, default=None)
     args = parser.parse_args()
     settings = SETTINGS[:2] if args.quick else SETTINGS
     seeds = list(range(1000, 1005 if args.quick else 1010))
     data = {}
     for setting in settings:
         began = time.perf_counter()
-        data[setting] = run_setting(args.policy, setting, seeds)
+        data[setting] = run_setting(args.policy, setting, seeds, GRIDS[args.grid])
         print(f"{setting}: {time.perf_counter() - began:.0f} s", flush=True)
     print(report(data))
-    payload = {"policy": args.policy, "seeds": seeds, "grid": GRID, "results": data}
+    grid = GRIDS[args.grid]
+    payload = {"policy": args.policy, "seeds": seeds, "grid": grid, "results": data}
     text = json.dumps(payload, indent=1) + "\n"
-    atomic_write(args.output, lambda f: f.write(text.encode()))
-    print(f"per-seed values: {args.output}")
+    output = args.output or OUT.with_name(f"search_defaults_{args.grid}.json")
+    atomic_write(output, lambda f: f.write(text.encode()))
+    print(f"per-seed values: {output}")
 
 
 if __name__ == "__main__":
