@@ -46,23 +46,30 @@ GRIDS = {
     "narrow": ((2, 1, 0.0), (2, 2, 0.0), (2, 3, 0.0), (2, 5, 0.0), (3, 3, 0.0), (2, 3, 0.5),
                (2, 3, 1.0)),
     "leaf": ((2, 3, 0.0), (2, 3, 0.02), (2, 3, 0.05), (2, 3, 0.1), (2, 3, 0.2)),
+    # A rule's choice tried besides the network's (search.propose).
+    "propose": ((2, 3, 0.0), (2, 3, 0.0, "hungarian"), (2, 3, 0.0, "mpdm"),
+                (1, 3, 0.0, "hungarian"), (2, 3, 0.0, "lookahead")),
 }  # fmt: skip
 
 
-def label(width: int, horizon: int, leaf: float) -> str:
-    """A variant's name in the table: ``w4 h3`` (``leaf0.5`` added when used)."""
-    return f"w{width} h{horizon}" + (f" leaf{leaf:g}" if leaf else "")
+def label(width: int, horizon: int, leaf: float, propose: str | None = None) -> str:
+    """A variant's name in the table: ``w4 h3`` (``leaf0.5``, ``+hungarian`` when used)."""
+    return (
+        f"w{width} h{horizon}"
+        + (f" leaf{leaf:g}" if leaf else "")
+        + (f" +{propose}" if propose else "")
+    )
 
 
 def run_setting(
-    policy: str, setting: str, seeds: list[int], grid: tuple[tuple[int, int, float], ...]
+    policy: str, setting: str, seeds: list[int], grid: tuple[tuple, ...]
 ) -> dict[str, dict[str, list[float]]]:
     """Per-seed TTD and wall time of the network, lookahead and every variant."""
     sim = build_sim(member_spec(setting))
     policies = {"network": load_policy(policy), "lookahead": make_baseline("lookahead")}
-    for width, horizon, leaf in grid:
-        policies[label(width, horizon, leaf)] = load_search(
-            policy, width=width, horizon=horizon, leaf=leaf
+    for width, horizon, leaf, *propose in grid:
+        policies[label(width, horizon, leaf, *propose)] = load_search(
+            policy, width=width, horizon=horizon, leaf=leaf, propose=(propose or [None])[0]
         )
     results = evaluate(sim, policies, seeds)
     return {

@@ -312,7 +312,13 @@ def _learned(option: str, sources: list[str], candidates: int | None) -> dict[st
 
 def _search_params(search: Any) -> tuple[tuple[str, Any], ...]:
     """A ``search`` section's ``(key, value)`` pairs for :class:`PolicySpec`."""
-    return tuple(sorted((k, getattr(search, k)) for k in ("horizon", "leaf", "width")))
+    keys = ("horizon", "leaf", "propose", "width")
+    return tuple(sorted((k, _plain(getattr(search, k))) for k in keys))
+
+
+def _plain(value: Any) -> Any:
+    """A list option as a tuple (a spec is frozen and hashed), a scalar as it is."""
+    return value if value is None or isinstance(value, (str, int, float)) else tuple(value)
 
 
 def as_list(value: object) -> list[str]:

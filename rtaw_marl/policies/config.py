@@ -8,7 +8,11 @@ from typing import Any
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.utils.checks import check_fields
 
-__all__ = ["BaselinesConfig", "SearchConfig"]
+__all__ = ["PROPOSERS", "BaselinesConfig", "SearchConfig"]
+
+#: Rules whose choices a search may try besides the network's (``search.propose``):
+#: online rules only (never ``hindsight``, which sees the future).
+PROPOSERS = ("mpdm", "rbts", "lookahead", "hungarian")
 
 
 @dataclass(kw_only=True)
@@ -68,15 +72,27 @@ class SearchConfig:
         width: Slots tried per decision: the network's best ``width``.
         horizon: Decisions rolled out after each tried slot's, the network choosing.
         leaf: Weight of the critic's value of each rollout's final state (0: none).
+        propose: Rules whose choices are tried too, besides the network's (one name or a
+            list of :data:`PROPOSERS`; rolled out like the others, with the network
+            choosing after them); ``None``: the network's slots only.
     """
 
     policy: Any = None
     width: int = 2
     horizon: int = 3
     leaf: float = 0.0
+    propose: Any = None
 
     def __post_init__(self) -> None:
         check_fields(self, "search.")
+        names = [] if self.propose is None else self.propose
+        names = [names] if isinstance(names, str) else list(names)
+        bad = [n for n in names if n not in PROPOSERS]
+        if bad:
+            raise ConfigError(
+                f"search.propose: {bad[0]!r} is not a rule the search can try; valid: "
+                f"{', '.join(PROPOSERS)}"
+            )
         for key, low in (("width", 1), ("horizon", 0)):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:

@@ -24,6 +24,7 @@ except ModuleNotFoundError as exc:
 from rtaw_marl.decision.features import candidate_slots, sim_observation
 from rtaw_marl.models.checkpoint import Critic, load_checkpoint, load_networks
 from rtaw_marl.models.rtaw_plus import RTAWPlusActor
+from rtaw_marl.policies import make_baseline
 from rtaw_marl.policies.config import SearchConfig
 from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.policies.lookahead import rollout_distances
@@ -40,6 +41,7 @@ def load_search(
     width: int = SearchConfig.width,
     horizon: int = SearchConfig.horizon,
     leaf: float = SearchConfig.leaf,
+    propose: Any = None,
     name: str | None = None,
     torch_threads: int | None = 1,
     candidates: int | None = None,
@@ -51,6 +53,7 @@ def load_search(
         width: Slots tried per decision: the network's best ``width``.
         horizon: Decisions rolled out after each tried slot's, the network choosing.
         leaf: Weight of the critic's value of each rollout's final state (0: none).
+        propose: Rules whose choices are tried too (``SearchConfig.propose``).
         name: Label in result tables; by default ``<checkpoint label>+search``.
         torch_threads: ``torch.set_num_threads``; ``None`` leaves torch as it is.
         candidates: With more queued tasks, search among the ``K`` nearest the free
@@ -60,7 +63,7 @@ def load_search(
         ConfigError: Bad ``width``/``horizon``/``leaf``, or a checkpoint that does not
             load (one line, as :func:`~rtaw_marl.policies.network.load_policy`).
     """
-    SearchConfig(width=width, horizon=horizon, leaf=leaf)  # checked before loading
+    SearchConfig(width=width, horizon=horizon, leaf=leaf, propose=propose)  # before loading
     path = checkpoint_path(source)
     if torch_threads is not None:
         torch.set_num_threads(int(torch_threads))
@@ -70,7 +73,7 @@ def load_search(
     network = NetworkPolicy(actor, name=label, candidates=candidates)
     algo = (ckpt.get("config") or {}).get("algo") or {}
     return SearchPolicy(
-        network, width=width, horizon=horizon, leaf=leaf,
+        network, width=width, horizon=horizon, leaf=leaf, propose=propose,
         critic=critic if leaf > 0 else None, reward_scale=algo.get("reward_scale"),
     )  # fmt: skip
 
@@ -84,6 +87,7 @@ class SearchPolicy:
         width: Slots tried per decision.
         horizon: Decisions rolled out after each tried slot's.
         leaf: Weight of the critic's value of a rollout's final state.
+        propose: Rules whose choices are tried too, after the network's (``None``: none).
         critic: The checkpoint's critic (needed when ``leaf > 0``).
         reward_scale: The checkpoint's ``algo.reward_scale`` (``None``: rewards were
             divided by the layout scale), to read the critic's value in cells.
@@ -100,10 +104,14 @@ class SearchPolicy:
         width: int = SearchConfig.width,
         horizon: int = SearchConfig.horizon,
         leaf: float = SearchConfig.leaf,
+        propose: Any = None,
         critic: Critic | None = None,
         reward_scale: float | None = None,
     ) -> None:
-        leaf = SearchConfig(width=width, horizon=horizon, leaf=leaf).leaf
+        config = SearchConfig(width=width, horizon=horizon, leaf=leaf, propose=propose)
+        leaf = config.leaf
+        names = [] if propose is None else [propose] if isinstance(propose, str) else propose
+        self.proposers = [make_baseline(n) for n in dict.fromkeys(names)]
         if leaf > 0 and critic is None:
             raise ValueError("search with leaf > 0 needs the checkpoint's critic")
         self.network = network
@@ -121,7 +129,9 @@ class SearchPolicy:
         self._fast: torch.jit.ScriptModule | None = None
 
     def reset(self, seed: int | None = None) -> None:
-        """Nothing to seed: the search is deterministic."""
+        """Seed the proposing rules' tie-breaking (the search itself is deterministic)."""
+        for rule in self.proposers:
+            rule.reset(seed)
 
     def act(self, observation: Any) -> int:
         """Not available: the search rolls the simulator's state forward."""
@@ -142,12 +152,26 @@ class SearchPolicy:
         obs = sim_observation(sim, net._features, slots)
         scores = self._scores({k: v[None] for k, v in obs.items()})[0]
         tried = top_slots(scores, obs["action_mask"], self.width)
+        if self.proposers:
+            tried = self._with_proposals(sim, slots, tried)
         if len(tried) == 1 or (self.horizon == 0 and self.critic is None):
             return int(slots[tried[0]])
         state = self._state(sim, slots)
         leaf = self._leaf(sim.layout.scale) if self.critic is not None else None
         cost = search_costs(state, tried, self.horizon, self._scores, self._keys, leaf)
         return int(slots[tried[int(np.argmin(cost))]])  # argmin: first of equals
+
+    def _with_proposals(
+        self, sim: WarehouseSim, slots: np.ndarray, tried: np.ndarray
+    ) -> np.ndarray:
+        """``tried`` (indices into ``slots``) and then each rule's choice not yet in it
+        (a rule's choice outside the searched ``slots`` is left out)."""
+        out = list(tried)
+        for rule in self.proposers:
+            where = np.flatnonzero(slots == rule.act_sim(sim))
+            if len(where) and int(where[0]) not in out:
+                out.append(int(where[0]))
+        return np.asarray(out, dtype=np.int64)
 
     def _state(self, sim: WarehouseSim, slots: np.ndarray) -> Rollout:
         rows, mask = sim.queue_rows[slots], sim.queue_mask[slots]

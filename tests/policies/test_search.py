@@ -174,3 +174,20 @@ def test_bad_search_options_are_refused(keys: dict, match: str) -> None:
     if "depth" not in keys:
         with pytest.raises(ConfigError, match=match):
             load_search(PLUS, **keys)
+
+
+def test_a_proposing_rules_choice_is_tried_too() -> None:
+    """``propose``: with width 1 the network's slot and hungarian's are rolled out; the
+    choice is one of the two, and differs from the network alone somewhere."""
+    search = load_search(PLUS, width=1, horizon=3, propose="hungarian")
+    network, hungarian = load_policy(PLUS), make_baseline("hungarian")
+    sim, differs = _sim(), 0
+    search.reset(0)
+    while not sim.done:
+        slot = search.act_sim(sim)
+        assert slot in (network.act_sim(sim), hungarian.act_sim(sim))
+        differs += slot != network.act_sim(sim)
+        sim.step(slot)
+    assert differs > 0
+    with pytest.raises(ConfigError, match=r"search\.propose: 'hindsight' is not a rule"):
+        SearchConfig(propose=["mpdm", "hindsight"])
