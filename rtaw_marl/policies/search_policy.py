@@ -202,6 +202,7 @@ class SearchPolicy:
         # The critic's value is discounted return in reward units: -TTD / L by default.
         to_cells = 1.0 / self.reward_scale if self.reward_scale else scale
 
+        @torch.no_grad()
         def value(features: dict[str, np.ndarray]) -> np.ndarray:
             inputs = [_tensor(features[k]) for k in critic.in_keys if k != "action_mask"]
             mask = torch.from_numpy(np.ascontiguousarray(features["action_mask"], dtype=bool))
