@@ -10,9 +10,9 @@ Usage::
 
 For each row: the best rule is chosen among
 :data:`~rtaw_marl.evaluation.best_rule.DEFAULT_RULES` on the selection seeds 1000-1019
-(:func:`~rtaw_marl.evaluation.best_rule.choose_best_rule`), then every rule, the network
+(:func:`~rtaw_marl.evaluation.best_rule.choose_best_rule`), then that rule, the network
 alone and the network searched (``policy=search`` with its defaults) play the evaluation
-seeds 0-19, and ``hindsight`` too on Table I (its share). Each finished row is written
+seeds 0-19, and MPDM and ``hindsight`` too on Table I (the share). Each finished row is written
 to ``benchmarks/data/search_<part>.json`` at once, so a killed run resumes where it
 stopped (rows already there are kept unless ``--again``). Prints, per row, the paired
 TTD differences against the best rule (positive: better) and the pooled ones.
@@ -34,7 +34,7 @@ import numpy as np
 
 from benchmarks.study import replace_section
 from rtaw_marl.evaluation import evaluate
-from rtaw_marl.evaluation.best_rule import DEFAULT_RULES, choose_best_rule
+from rtaw_marl.evaluation.best_rule import choose_best_rule
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.evaluation.stats import hindsight_share, paired_difference, pooled_difference
 from rtaw_marl.policies import load_policy, make_baseline
@@ -113,9 +113,9 @@ def run_row(scenario: Scenario, network: str, shares: bool) -> dict:
     """The best rule on selection seeds, then every policy on the evaluation seeds."""
     sim = build_sim(scenario.spec())
     best = choose_best_rule(sim)
-    policies = {r: make_baseline(r) for r in DEFAULT_RULES}
-    if shares:
-        policies["hindsight"] = make_baseline("hindsight")
+    # On the evaluation seeds: the best rule, and MPDM and hindsight for the shares.
+    rules = [best.name, "mpdm", "hindsight"] if shares else [best.name]
+    policies = {r: make_baseline(r) for r in dict.fromkeys(rules)}
     policies["network"] = load_policy(network)
     policies["search"] = load_search(network)
     results = evaluate(sim, policies, list(EVAL_SEEDS))
@@ -203,8 +203,11 @@ def main() -> None:
             if key in rows and not args.again:
                 continue
             began = time.perf_counter()
-            rows[key] = run_row(scenario, args.network, shares=part == "table1")
+            row = run_row(scenario, args.network, shares=part == "table1")
             print(f"{part} | {key}: {time.perf_counter() - began:.0f} s", flush=True)
+            # Rows another process of this script wrote meanwhile are kept (--only splits).
+            now = json.loads(path.read_text())["rows"] if path.exists() else {}
+            rows = {**rows, **now, key: row}
             payload = {"network": args.network, "seeds": list(EVAL_SEEDS), "rows": rows}
             text = json.dumps(payload, indent=1) + "\n"
             atomic_write(path, lambda f, t=text: f.write(t.encode()))
