@@ -45,6 +45,7 @@ def test_every_block_runs_in_order(tmp_path: Path) -> None:
     assert "random policy: TTD" in outputs[0]
     assert (tmp_path / "runs" / "usc" / "checkpoints" / "best.pt").is_file()
     assert "| usc/best |" in outputs[2]
+    assert "| usc/best+search |" in outputs[2]
     assert "usc/best" in outputs[3]  # the CSV's policies, read by pandas
     assert "best rule here:" in outputs[4]
     assert (tmp_path / "runs" / "usc" / "view.html").stat().st_size > 10_000
