@@ -500,6 +500,7 @@ def test_search_over_a_learned_policy_runs_under_its_own_label(tmp_path: Path, c
     assert list(data["policies"]) == ["shelves_astar_m10_plus", "shelves_astar_m10_plus+search"]
     assert data["config"]["search"] == {
         "policy": "shelves_astar_m10_plus", "width": 3, "horizon": 2, "leaf": 0.0,
+        "propose": None,
     }  # fmt: skip
 
 

@@ -60,9 +60,10 @@ def test_eval_help_describes_keys_from_the_schemas(cli) -> None:
     assert sim_docs["queue_len"].replace("``", "")[:30] in _key_line(result.out, "sim.queue_len=10")
     assert eval_docs["seeds"][:30] in _key_line(result.out, "seeds=[0,1,2,3,4]")
     assert "baselines.lookahead_horizon=3" in result.out
+    assert "search.width=2" in result.out  # a section's keys, each on its line
     # Every top-level key of the schema has a line.
     for field in dataclasses.fields(EvalConfig):
-        if field.name not in ("sim", "layout", "navigator", "tasks", "baselines"):
+        if field.name not in ("sim", "layout", "navigator", "tasks", "baselines", "search"):
             assert f"\n  {field.name}=" in result.out, field.name
 
 
