@@ -26,8 +26,8 @@ DEMO_RUN := runs/demo
 # Train RTAW+ briefly (a lookahead warm start, then PPO), then compare it, the shipped
 # generalist RTAW+ (one policy for every scenario) and the generalist searched at decision
 # time (policy=search) with MPDM, RBTS, lookahead and the best rule of the setting on 20
-# evaluation seeds of the default scenario; then a page to explore the generalist and
-# lookahead side by side, executed collision-free (open runs/demo/view.html).
+# evaluation seeds of the default scenario; then a page to explore the searched generalist
+# and lookahead side by side, executed collision-free (open runs/demo/view.html).
 demo: $(STAMP)
 	rm -rf $(DEMO_RUN)
 	$(BIN)/rtaw-train model=rtaw_plus imitation.teacher=lookahead imitation.frames=16384 \
@@ -36,8 +36,8 @@ demo: $(STAMP)
 		pretrained=generalist_plus search.policy=generalist_plus \
 		checkpoint=$(DEMO_RUN)/checkpoints/best.pt \
 		'seeds=$${range:0,20}' compare_to=best output=$(DEMO_RUN)/results.json
-	$(BIN)/rtaw-view navigator=sipp sim.num_tasks=100 policy=[lookahead,pretrained] \
-		pretrained=generalist_plus output=$(DEMO_RUN)/view.html
+	$(BIN)/rtaw-view navigator=sipp sim.num_tasks=100 policy=[lookahead,search] \
+		search.policy=generalist_plus output=$(DEMO_RUN)/view.html
 
 # LoRR's start kit (../shared), built once per machine into ~/.cache/rtaw_marl/lorr: a
 # few minutes the first time, then nothing. The system packages it needs (cmake, Boost)
