@@ -191,3 +191,19 @@ def test_a_proposing_rules_choice_is_tried_too() -> None:
     assert differs > 0
     with pytest.raises(ConfigError, match=r"search\.propose: 'hindsight' is not a rule"):
         SearchConfig(propose=["mpdm", "hindsight"])
+
+
+def test_with_candidates_the_search_stays_among_the_nearest_k() -> None:
+    """``candidates=K`` on a long queue: the searched slot is one of the K tasks nearest
+    the free robot (the network's candidates), and the episode plays through."""
+    from rtaw_marl.decision.features import candidate_slots
+
+    search = load_search(PLUS, candidates=4)
+    sim = _sim(queue_len=12)
+    while not sim.done:
+        slot = search.act_sim(sim)
+        if sim.queue_mask.sum() > 4:
+            key = (sim.robot_distances() / sim.layout.scale).astype(np.float32)
+            assert slot in candidate_slots(key, sim.queue_mask, 4)
+        assert sim.queue_mask[slot]
+        sim.step(slot)
