@@ -29,6 +29,7 @@ from rtaw_marl.decision.features import candidate_slots
 from rtaw_marl.decision.rule_input import RuleInput
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.baselines import BaselinePolicy
+from rtaw_marl.policies.search import rollout_start, rollout_take
 from rtaw_marl.sim.distances import DistanceModel
 
 __all__ = ["Hungarian", "Lookahead", "lookahead_costs", "rollout_distances"]
@@ -66,26 +67,18 @@ def lookahead_costs(
     slots = np.flatnonzero(mask)
     k = np.arange(len(slots))
     cost = first[slots].astype(np.float64)
-    free = np.tile(free_at, (len(slots), 1))
-    where = np.tile(np.arange(m), (len(slots), 1))  # row of `ends` each robot stands at
-    left = np.tile(mask, (len(slots), 1))
-    free[k, robot] = np.maximum(now, now + cost + lengths[slots] + noise_mean)
-    where[k, robot] = m + slots
-    left[k, slots] = False
+    free, where, left = rollout_start(robot, now, free_at, mask, lengths, noise_mean, slots, cost)
     for _ in range(horizon):
         if not left.any():
             break
         nxt = free.argmin(axis=1)  # ties: the lowest robot id, as the simulator
-        t = free[k, nxt]
         d = np.where(left, ends[where[k, nxt]], np.inf)
         j = d.argmin(axis=1)
         dj = d[k, j]
         live = np.isfinite(dj)  # candidates whose rollout still has a task to take
-        cost += np.where(live, dj, 0.0)
-        done_at = np.maximum(t, t + dj + lengths[j] + noise_mean)
-        free[k, nxt] = np.where(live, done_at, free[k, nxt])
-        where[k, nxt] = np.where(live, m + j, where[k, nxt])
-        left[k[live], j[live]] = False
+        dj = np.where(live, dj, 0.0)
+        cost += dj
+        rollout_take(free, where, left, nxt, j, dj, live, lengths, noise_mean, m)
     out = np.full(n, np.inf)
     out[slots] = cost
     return out

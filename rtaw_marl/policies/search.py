@@ -28,7 +28,15 @@ import numpy as np
 
 from rtaw_marl.decision.features import Decision, decision_features, nearest_other
 
-__all__ = ["Rollout", "Scorer", "nearest_scores", "search_costs", "top_slots"]
+__all__ = [
+    "Rollout",
+    "Scorer",
+    "nearest_scores",
+    "rollout_start",
+    "rollout_take",
+    "search_costs",
+    "top_slots",
+]
 
 #: ``(features {key: [B, ...]}) -> float [B, N]`` scores of each queued slot per row
 #: (the larger, the more preferred; empty slots are masked by the caller).
@@ -100,17 +108,14 @@ def search_costs(
         ``float64 [B]`` cost per candidate: pickup distance over the rollout, less the
         leaf value.
     """
-    m, b = len(state.free_at), len(candidates)
-    k = np.arange(b)
+    m = len(state.free_at)
+    k = np.arange(len(candidates))
     ends = state.ends
     cost = ends[state.robot, candidates].astype(np.float64)
-    free = np.tile(state.free_at, (b, 1))
-    where = np.tile(np.arange(m), (b, 1))  # row of `ends` each robot stands at
-    left = np.tile(state.mask, (b, 1))
-    done = state.now + cost + state.lengths[candidates] + state.noise_mean
-    free[k, state.robot] = np.maximum(state.now, done)
-    where[k, state.robot] = m + candidates
-    left[k, candidates] = False
+    free, where, left = rollout_start(
+        state.robot, state.now, state.free_at, state.mask, state.lengths, state.noise_mean,
+        candidates, cost,
+    )  # fmt: skip
     for _ in range(horizon):
         if not left.any():
             break
@@ -121,14 +126,59 @@ def search_costs(
         live = left[k, j]  # rollouts that still had a task to take
         dj = np.where(live, ends[where[k, nxt], j], 0.0)
         cost += dj
-        finish = np.maximum(t, t + dj + state.lengths[j] + state.noise_mean)
-        free[k, nxt] = np.where(live, finish, free[k, nxt])
-        where[k, nxt] = np.where(live, m + j, where[k, nxt])
-        left[k[live], j[live]] = False
+        rollout_take(free, where, left, nxt, j, dj, live, state.lengths, state.noise_mean, m)
     if leaf is not None:
         nxt = free.argmin(axis=1)
         cost -= leaf(_features(state, free, where, left, nxt, free[k, nxt], keys))
     return cost
+
+
+def rollout_start(
+    robot: int,
+    now: float,
+    free_at: np.ndarray,
+    mask: np.ndarray,
+    lengths: np.ndarray,
+    noise_mean: float,
+    candidates: np.ndarray,
+    first: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One rollout per candidate slot, the free ``robot`` given it at ``now`` (``first
+    float [B]``: its distance to each): ``free float64 [B, M]`` free times, ``where int
+    [B, M]`` the row of ``ends`` each robot stands at (its cell, or ``M + slot`` of the
+    task it delivers last), ``left bool [B, N]`` the tasks still queued."""
+    m, b = len(free_at), len(candidates)
+    k = np.arange(b)
+    free = np.tile(free_at, (b, 1))
+    where = np.tile(np.arange(m), (b, 1))
+    left = np.tile(mask, (b, 1))
+    free[k, robot] = np.maximum(now, now + first + lengths[candidates] + noise_mean)
+    where[k, robot] = m + candidates
+    left[k, candidates] = False
+    return free, where, left
+
+
+def rollout_take(
+    free: np.ndarray,
+    where: np.ndarray,
+    left: np.ndarray,
+    nxt: np.ndarray,
+    j: np.ndarray,
+    dj: np.ndarray,
+    live: np.ndarray,
+    lengths: np.ndarray,
+    noise_mean: float,
+    m: int,
+) -> None:
+    """In place: in each rollout ``b`` where ``live[b]``, robot ``nxt[b]`` takes slot
+    ``j[b]`` at distance ``dj[b]`` (free again after it and the task's length, with the
+    noise's mean); the other rollouts are left as they are."""
+    k = np.arange(len(nxt))
+    t = free[k, nxt]
+    finish = np.maximum(t, t + dj + lengths[j] + noise_mean)
+    free[k, nxt] = np.where(live, finish, t)
+    where[k, nxt] = np.where(live, m + j, where[k, nxt])
+    left[k[live], j[live]] = False
 
 
 def _features(
