@@ -32,7 +32,7 @@ from benchmarks.tables import (
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.scenarios import SCENARIOS, Scenario
 
-__all__ = ["GENERALIST_STUDIES", "SHARED_MAPS"]
+__all__ = ["GENERALIST_STUDIES", "SHARED_MAPS", "custom_scenario", "shared_map"]
 
 #: The generalist's label in the tables, and its shipped name.
 LABEL, NAME = "generalist", "generalist_plus"
@@ -119,15 +119,16 @@ def _table2(result: StudyResult, stored: Mapping[str, StudyResult]) -> str:
     )
 
 
-def _file(*parts: str) -> dict[str, str]:
+def shared_map(*parts: str) -> dict[str, str]:
+    """The layout option of a map file under ``../shared/maps``."""
     return {"name": "file", "path": str(SHARED_MAPS.joinpath(*parts))}
 
 
 def _unseen() -> dict[str, tuple[Scenario, str]]:
     """The unseen settings: key -> (scenario, the nearest specialist's shipped name)."""
     c, big = SCENARIOS["C_astar_m10"], SCENARIOS["C256_astar_m1000_random"]
-    movingai = _file("movingai", "warehouse-10-20-10-2-1.map")
-    lorr = _file("lorr", "maps", "warehouse_large.map")
+    movingai = shared_map("movingai", "warehouse-10-20-10-2-1.map")
+    lorr = shared_map("lorr", "maps", "warehouse_large.map")
     out: dict[str, tuple[Scenario, str]] = {}
     for m in (3, 30, 150, 300):
         out[f"layout C, M={m}"] = (
@@ -140,7 +141,7 @@ def _unseen() -> dict[str, tuple[Scenario, str]]:
     )
     out["256x256 C, M=2000"] = (big.with_sim(num_robots=2000), "C256_astar_m500_random_plus")
     for m in (10, 100):
-        s = _custom(f"movingai_m{m}", movingai, {"num_robots": m, "num_tasks": 500})
+        s = custom_scenario(f"movingai_m{m}", movingai, {"num_robots": m, "num_tasks": 500})
         out[f"MovingAI warehouse-10-20-10-2-1, M={m}"] = (s, "C_astar_m100_long_plus")
     # The setting that selected the generalist's checkpoint (a mix member), on the
     # evaluation seeds: its selection-seed gain against its held-out gain.
@@ -151,13 +152,14 @@ def _unseen() -> dict[str, tuple[Scenario, str]]:
     for m, tasks in ((1000, 2000), (10_000, 1000)):
         sim = {"num_robots": m, "num_tasks": tasks, "episode_mode": "paper"}
         out[f"LoRR warehouse_large, M={m}"] = (
-            _custom(f"lorr_m{m}", lorr, sim),
+            custom_scenario(f"lorr_m{m}", lorr, sim),
             "C256_astar_m500_random_plus",
         )
     return out
 
 
-def _custom(name: str, layout: dict, sim: dict) -> Scenario:
+def custom_scenario(name: str, layout: dict, sim: dict) -> Scenario:
+    """A scenario on ``layout`` with A* and random tasks (``sim``: its simulator keys)."""
     return Scenario(
         name=name, title=name, description=name, layout=layout, navigator="astar",
         tasks="random", sim=sim,

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.generalist import custom_scenario, shared_map
 from benchmarks.study import replace_section
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.best_rule import choose_best_rule
@@ -45,21 +46,9 @@ from rtaw_marl.utils.atomic import atomic_write
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "benchmarks" / "data"
-SHARED = ROOT.parent / "shared" / "maps"
 #: Table I and II in row order (benchmarks.tables).
 TABLE1 = ("direct", "direct_m100", *(x for p in "ABCDE" for x in (f"{p}", f"{p}_m100")))
 TABLE2 = tuple(f"{g}_m{m}_random" for m in (500, 1000) for g in ("open300_direct", "C256_astar"))
-
-
-def _custom(name: str, layout: dict, sim: dict, tasks: str = "random") -> Scenario:
-    return Scenario(
-        name=name, title=name, description=name, layout=layout, navigator="astar",
-        tasks=tasks, sim=sim,
-    )  # fmt: skip
-
-
-def _file(*parts: str) -> dict[str, str]:
-    return {"name": "file", "path": str(SHARED.joinpath(*parts))}
 
 
 def table1() -> dict[str, Scenario]:
@@ -87,18 +76,20 @@ def holdout() -> dict[str, Scenario]:
     out["layout A, queue 5, M=150, paper"] = a.with_sim(
         num_robots=150, queue_len=5, episode_mode="paper"
     )
-    out["120x120 B, M=100"] = _custom(
+    out["120x120 B, M=100"] = custom_scenario(
         "b120", {"name": "preset", "preset": "B", "width": 120, "height": 120},
         {"num_robots": 100, "num_tasks": 1000},
     )  # fmt: skip
     out["256x256 C, M=2000"] = SCENARIOS["C256_astar_m1000_random"].with_sim(num_robots=2000)
     for name, m in (("warehouse-10-20-10-2-1", 10), ("warehouse-10-20-10-2-1", 100),
                     ("warehouse-20-40-10-2-2", 100)):  # fmt: skip
-        out[f"MovingAI {name}, M={m}"] = _custom(
-            f"{name}_m{m}", _file("movingai", f"{name}.map"), {"num_robots": m, "num_tasks": 500}
+        out[f"MovingAI {name}, M={m}"] = custom_scenario(
+            f"{name}_m{m}",
+            shared_map("movingai", f"{name}.map"),
+            {"num_robots": m, "num_tasks": 500},
         )
-    out["LoRR warehouse_large, M=1000, paper"] = _custom(
-        "lorr_m1000", _file("lorr", "maps", "warehouse_large.map"),
+    out["LoRR warehouse_large, M=1000, paper"] = custom_scenario(
+        "lorr_m1000", shared_map("lorr", "maps", "warehouse_large.map"),
         {"num_robots": 1000, "num_tasks": 2000, "episode_mode": "paper"},
     )  # fmt: skip
     return out

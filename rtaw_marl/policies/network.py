@@ -137,6 +137,11 @@ class NetworkPolicy:
         self._traceable = isinstance(net, RTAWPlusActor)
         self._fast: torch.jit.ScriptModule | None = None
 
+    @property
+    def feature_keys(self) -> tuple[str, ...]:
+        """The observation entries the network reads (its ``in_keys`` but the mask)."""
+        return self._features
+
     def reset(self, seed: int | None = None) -> None:
         """Nothing to seed: greedy decisions are deterministic."""
 

@@ -119,7 +119,7 @@ class SearchPolicy:
         self.width, self.horizon, self.leaf = width, horizon, float(leaf)
         self.critic = None if critic is None else critic.eval()
         self.reward_scale = reward_scale
-        keys = set(network._features)
+        keys = set(network.feature_keys)
         if self.critic is not None:
             keys |= {k for k in self.critic.in_keys if k != "action_mask"}
         self._keys = tuple(sorted(keys))
@@ -149,7 +149,7 @@ class SearchPolicy:
         if net.candidates is not None and sim.queue_len > net.candidates:
             key = (sim.robot_distances() / sim.layout.scale).astype(np.float32)
             slots = candidate_slots(key, mask, net.candidates)
-        obs = sim_observation(sim, net._features, slots)
+        obs = sim_observation(sim, net.feature_keys, slots)
         scores = self._scores({k: v[None] for k, v in obs.items()})[0]
         tried = top_slots(scores, obs["action_mask"], self.width)
         if self.proposers:
@@ -186,7 +186,7 @@ class SearchPolicy:
     @torch.no_grad()
     def _scores(self, features: dict[str, np.ndarray]) -> np.ndarray:
         """The network's logits ``float64 [B, N]`` for a batch of decisions."""
-        inputs = [_tensor(features[k]) for k in self.network._features]
+        inputs = [_tensor(features[k]) for k in self.network.feature_keys]
         mask = torch.from_numpy(np.ascontiguousarray(features["action_mask"], dtype=bool))
         if not self._traceable:
             return self.network.net(*inputs, mask).double().numpy()
