@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -74,6 +75,17 @@ class Rollout:
     ends: np.ndarray
     noise_mean: float
     scale: float
+
+    @cached_property
+    def cells(self) -> np.ndarray:
+        """``int [M + N, 2]``: the cell of each row of :attr:`ends` (robots, then the
+        queued destinations), computed once per decision."""
+        return np.concatenate([self.robot_xy, self.rows[:, 2:]])
+
+    @cached_property
+    def finite_ends(self) -> np.ndarray:
+        """:attr:`ends` with the empty slots' ``inf`` as 0 (the features mask them)."""
+        return np.where(np.isfinite(self.ends), self.ends, 0.0)
 
 
 def top_slots(scores: np.ndarray, mask: np.ndarray, width: int) -> np.ndarray:
@@ -194,12 +206,10 @@ def _features(
     free times, ``where int [B, M]`` rows of ``ends`` the robots stand at, ``left bool
     [B, N]`` tasks still queued, ``nxt int [B]`` acting robots at times ``t float [B]``."""
     m, n = len(state.free_at), len(state.mask)
-    cells = np.concatenate([state.robot_xy, state.rows[:, 2:]])  # [M + N, 2]
-    # Empty slots' distances are inf in `ends` (no task); the features mask them anyway.
-    dist = np.where(np.isfinite(state.ends), state.ends, 0.0)[where]  # [B, M, N]
+    dist = state.finite_ends[where]  # [B, M, N]
     b = len(nxt)
     decision = Decision(
-        robot_xy=cells[where],
+        robot_xy=state.cells[where],
         free_at=free,
         time=t,
         robot=nxt,
