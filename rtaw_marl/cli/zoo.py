@@ -16,9 +16,9 @@ Examples::
 Each entry trains with the exact ``rtaw-train`` command its shipped checkpoint records,
 into ``<runs>/<name>`` (``--runs``, default ``runs/pretrained``), then its best
 checkpoint is written to ``<ship-to>/<name>.pt`` (default: the package's own folder of
-shipped policies) and its training curve to ``<curves>/training_<name>.png``
-(``--curves``, default ``docs/img`` where a ``docs`` folder is in the working
-directory). Continued and curriculum entries continue their base's run in
+shipped policies), and its training curve to ``<curves>/training_<name>.png`` when
+``--curves`` names a folder (the project's docs use ``--curves docs/img``; the command
+never writes the docs on its own). Continued and curriculum entries continue their base's run in
 ``<runs>/<base>``: they run after the others, and ``--launcher`` leaves them out.
 Unknown names, a missing base run or a bad option: one ``error:`` line, exit status 2.
 """
@@ -48,7 +48,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--summary", action="store_true", help="print the shipped policies' table")
     p.add_argument("--runs", type=Path, default=RUNS, help="the folder of the runs")
     p.add_argument("--ship-to", type=Path, default=retrain.SHIPPED, help="where .pt files go")
-    p.add_argument("--curves", type=Path, help="where training curves go (default: docs/img)")
+    p.add_argument(
+        "--curves", type=Path, help="also copy each training curve here (the docs: docs/img)"
+    )
     p.add_argument("--launcher", choices=retrain.LAUNCHERS, help="one rtaw-train -m sweep")
     p.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE",
@@ -74,7 +76,8 @@ def run(argv: list[str] | None = None) -> int:
         print(retrain.summary(args.ship_to))
         return 0
     names = retrain.select(args.names, plus=args.plus, paper=args.paper)
-    curves = args.curves or (Path("docs/img") if Path("docs").is_dir() else None)
+    # The package never writes the docs on its own: curves go where --curves says.
+    curves = args.curves
     if args.launcher:
         names, staged = retrain.phases(names)
         if staged:
