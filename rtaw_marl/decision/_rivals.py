@@ -1,7 +1,7 @@
 """Compiled kernel of the acting robot's rivals: the ``k`` robots arriving first at each
 queued task, found in one pass over the fleet.
 
-The NumPy form (:func:`rtaw_marl.decision.features._rival_order`) builds the ``[P, N, M]``
+The NumPy form (:func:`rtaw_marl.decision.relational._rival_order`) builds the ``[P, N, M]``
 arrival tensor, masks the actor and partitions it: at ``M = 1000`` that was most of a
 batched env step. This kernel keeps a sorted list of ``k`` per task while it scans the
 robots, so it reads each distance once and allocates nothing of size ``M``. Same float

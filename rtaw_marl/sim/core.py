@@ -46,6 +46,7 @@ from rtaw_marl.sim.execution import EpisodeRecords, Executor, InstantTravel
 from rtaw_marl.sim.inputs import slot_index
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
+from rtaw_marl.sim.queue_distances import QueueDistances
 from rtaw_marl.sim.tasks import TaskStream
 
 if TYPE_CHECKING:
@@ -144,6 +145,7 @@ class WarehouseSim:
         self._num_decisions = config.num_tasks
         self._reward_code = REWARDS.index(config.reward)
         self._slots = distance_model.target_slots(config.queue_len)
+        self._queue_distances = QueueDistances(self._slots, config.num_robots)
         if buffers is None:
             buffers = SimBuffers.allocate(config.num_robots, config.queue_len)
         buffers.check(config.num_robots, config.queue_len)
@@ -188,6 +190,7 @@ class WarehouseSim:
         self.queue_mask[:] = False
         self.queue_rows[:] = 0
         self.queue_length[:] = 0.0
+        self._queue_distances.clear()
         first = min(n, total)
         self.task_arrival[:first] = 0.0
         for slot in range(first):
@@ -252,8 +255,14 @@ class WarehouseSim:
 
     def distance_matrix(self, slots: np.ndarray | None = None) -> np.ndarray:
         """Distances ``float64 [M, N]`` from every robot's cell to each queued origin
-        (``[M, K]`` to the origins of ``slots int [K]`` only, when given)."""
-        return self._slots.distances_from(self.robot_xy, slots)
+        (``[M, K]`` to the origins of ``slots int [K]`` only, when given).
+
+        The whole matrix is kept between decisions and updated where robots or slots
+        changed (:class:`~rtaw_marl.sim.queue_distances.QueueDistances`); this returns a
+        copy."""
+        if slots is not None:
+            return self._slots.distances_from(self.robot_xy, slots)
+        return self._queue_distances.fleet(self.robot_xy).copy()
 
     def free_robots(self) -> np.ndarray:
         """``int64 [F]`` the robots free at the current decision, the selected one
@@ -279,7 +288,9 @@ class WarehouseSim:
         """``float64 [N]`` (or ``[K]`` for ``slots int [K]``): the distance from each
         queued destination to the nearest origin of *another* queued task, ``inf`` when
         there is none (or the slot is empty). ``O(K N)`` distance lookups."""
-        rows = np.arange(self.queue_len) if slots is None else np.asarray(slots)
+        if slots is None:
+            return self._queue_distances.chain_nearest(self.queue_rows, self.queue_mask).copy()
+        rows = np.asarray(slots)
         chain = self._slots.distances_from(self.queue_rows[rows, 2:])  # [K, N]
         other = np.broadcast_to(self.queue_mask, chain.shape).copy()
         other[np.arange(len(rows)), rows] = False
@@ -333,6 +344,7 @@ class WarehouseSim:
         self.task_finished[task] = finish
         self.task_robot[task] = robot
         self.robot_xy[robot] = self.queue_rows[slot, 2:]
+        self._queue_distances.robot_moved(robot)
         # Busy from assignment until free again (noise included), so idle >= 0.
         self.robot_busy[robot] += finish - now
         if self._refill_on_finish:
@@ -362,6 +374,7 @@ class WarehouseSim:
         return -(ttd + length)
 
     def _empty(self, slot: int) -> None:
+        self._queue_distances.slot_changed(slot)
         self.queue_ids[slot] = -1
         self.queue_mask[slot] = False
         self.queue_rows[slot] = 0
@@ -383,6 +396,7 @@ class WarehouseSim:
         row = self.tasks[task]
         ox, oy, dx, dy = row.tolist()
         self._slots.set(slot, ox, oy)
+        self._queue_distances.slot_changed(slot)
         # A task whose pickup is its delivery (LoRR's files hold some) takes one timestep,
         # as in LoRR (one errand checked per timestep), never zero: a robot at its cell
         # would otherwise finish the whole pool without time passing.
@@ -468,6 +482,7 @@ class WarehouseSim:
         for slot in np.flatnonzero(self.queue_mask):
             ox, oy = self.queue_rows[slot, :2].tolist()
             self._slots.set(int(slot), ox, oy)
+        self._queue_distances.clear()
         self._dist = None
 
     # ------------------------------------------------------------------ results

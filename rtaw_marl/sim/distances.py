@@ -35,6 +35,12 @@ import numpy as np
 
 from rtaw_marl.errors import LayoutError
 from rtaw_marl.sim._bfs import bfs_fields
+from rtaw_marl.sim._slot_kernels import (
+    euclidean_from,
+    euclidean_refresh,
+    field_gather,
+    field_refresh,
+)
 from rtaw_marl.sim.layout import Layout
 
 __all__ = [
@@ -67,6 +73,15 @@ class TargetSlots(ABC):
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         """Distances ``float64 [N]`` from cell ``(x, y)`` to each slot."""
         return self.distances_from(np.array([[x, y]]))[0]
+
+    def refresh(self, xy: np.ndarray, out: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> None:
+        """Recompute rows ``rows int [R]`` and columns ``cols int [C]`` of ``out``,
+        :meth:`distances_from` ``(xy)``'s ``float64 [P, N]`` matrix, in place (after
+        the cells ``xy[rows]`` or the targets of slots ``cols`` changed)."""
+        if len(rows):
+            out[rows] = self.distances_from(xy[rows])
+        if len(cols):
+            out[:, cols] = self.distances_from(xy, cols)
 
     @abstractmethod
     def distance_to(self, slot: int, x: int, y: int) -> float:
@@ -143,12 +158,19 @@ class _DirectSlots(TargetSlots):
         self._xy[slot, 1] = y
 
     def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
-        xy = np.asarray(xy, dtype=np.float64)
-        targets = self._xy if slots is None else self._xy[slots]
-        return np.hypot(xy[:, 0:1] - targets[:, 0], xy[:, 1:2] - targets[:, 1])
+        xy = np.asarray(xy)
+        if xy.dtype != np.int64:
+            xy = xy.astype(np.float64)
+        targets = self._xy if slots is None else self._xy[np.asarray(slots)]
+        out = np.empty((len(xy), len(targets)), dtype=np.float64)
+        euclidean_from(xy.reshape(-1, 2), targets, out)
+        return out
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         return np.hypot(x - self._xy[:, 0], y - self._xy[:, 1])
+
+    def refresh(self, xy: np.ndarray, out: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> None:
+        euclidean_refresh(xy, self._xy, rows, cols, out)
 
     def distance_to(self, slot: int, x: int, y: int) -> float:
         return float(np.hypot(x - self._xy[slot, 0], y - self._xy[slot, 1]))
@@ -329,14 +351,18 @@ class _FieldSlots(TargetSlots):
         self._fields[slot] = self._model.field(x, y)
 
     def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
-        idx = self._model._padded_index(xy)
-        if slots is None:
-            return self._fields[:, idx].T.astype(np.float64)
-        # One gather of the [K, P] entries (never a copy of K whole fields).
-        return self._fields[np.asarray(slots)[:, None], idx].T.astype(np.float64)
+        xy = np.asarray(xy, dtype=np.int64).reshape(-1, 2)
+        rows = self._rows if slots is None else np.asarray(slots, dtype=np.int64)
+        # One gather of the [P, K] entries (never a copy of K whole fields).
+        out = np.empty((len(xy), len(rows)), dtype=np.float64)
+        field_gather(self._fields, rows, xy, self._model._wp, out)
+        return out
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         return self._fields[:, (y + 1) * self._model._wp + x + 1].astype(np.float64)
+
+    def refresh(self, xy: np.ndarray, out: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> None:
+        field_refresh(self._fields, xy, self._model._wp, rows, cols, out)
 
     def distance_to(self, slot: int, x: int, y: int) -> float:
         d = int(self._fields[slot, (y + 1) * self._model._wp + x + 1])

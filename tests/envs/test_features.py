@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -83,7 +84,7 @@ def test_compiled_rivals_equal_a_stable_sort_of_every_robot() -> None:
     """The acting robot's rivals (compiled, one pass over the fleet) are the first ``k``
     of a stable sort of ``arrival - own`` over all other robots: ties (integer grid
     distances, many robots free now) go to the lowest robot id, at the k-th place too."""
-    from rtaw_marl.decision.features import _actor_rivals
+    from rtaw_marl.decision.relational import _actor_rivals
 
     rng = np.random.default_rng(0)
     for _ in range(300):
@@ -119,3 +120,75 @@ def test_fleet_summary_is_quantiles_and_mean_of_the_times_until_free(m: int) -> 
         np.testing.assert_allclose(got[b, :-1], want, rtol=1e-6)
         np.testing.assert_allclose(got[b, -1], remaining.mean() / 60.0, rtol=1e-6)
     assert not got[2].any()  # everyone free at t = 60
+
+
+@pytest.mark.parametrize(("robots", "navigator"), [(1, "direct"), (5, "astar"), (40, "direct")])
+def test_compiled_acting_view_equals_the_numpy_functions(robots: int, navigator: str) -> None:
+    """The acting view (compiled, every env step) equals the NumPy functions' values bit
+    for bit: one simulator and the same decisions stacked as a batch."""
+    from rtaw_marl.decision.features import (
+        ALL_KEYS,
+        Decision,
+        decision_features,
+        fleet_features,
+        relational_features,
+        robot_features,
+        task_features,
+    )
+
+    env = warehouse_v1.env(num_robots=robots, num_tasks=60, navigator=navigator, tasks="random")
+    env.reset(seed=11)
+    sim = env.unwrapped.sim
+    decisions = []
+    while not sim.done and len(decisions) < 25:
+        d = Decision.of_sim(sim, ALL_KEYS)
+        got = decision_features(d, ALL_KEYS)
+        rows = robot_features(d.robot_xy, d.free_at, d.time, d.scale)
+        remaining = d.free_at - d.time
+        rel, rivals = relational_features(
+            d.distances, remaining, np.array([d.robot]), d.queue_length, d.waits, d.nearest,
+            d.queue_mask, d.scale,
+        )  # fmt: skip
+        want = {
+            "robots": rows,
+            "agent": rows[d.robot],
+            "tasks": task_features(
+                d.queue_rows, d.queue_length, d.own_distances, d.queue_mask, d.scale
+            ),
+            "fleet": fleet_features(d.free_at, d.time, d.scale),
+            "relations": rel[0],
+            "rivals": rivals[0],
+            "action_mask": d.queue_mask,
+        }
+        assert set(got) == set(want)
+        for key, value in want.items():
+            assert got[key].dtype == value.dtype, key
+            assert got[key].tobytes() == value.tobytes(), key
+        # The simulator's arrays change in place: keep this decision's values.
+        kept = {f.name: np.copy(getattr(d, f.name)) for f in dataclasses.fields(d)}
+        decisions.append((Decision(**kept), got))
+        sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
+    stacked = Decision(
+        *(np.stack([getattr(d, f) for d, _ in decisions]) for f in (
+            "robot_xy", "free_at", "time", "robot", "queue_rows", "queue_length", "queue_mask")),
+        decisions[0][0].scale,
+        **{f: np.stack([getattr(d, f) for d, _ in decisions])
+           for f in ("own_distances", "distances", "waits", "nearest")},
+    )  # fmt: skip
+    batch = decision_features(stacked, ALL_KEYS)
+    for key in ALL_KEYS:
+        want = np.stack([got[key] for _, got in decisions])
+        assert batch[key].tobytes() == want.tobytes(), key
+
+
+def test_compiled_hypot_equals_numpy_on_every_grid_difference() -> None:
+    """The slot kernels' ``math.hypot`` is ``np.hypot`` on every integer difference of a
+    grid up to 1,100 cells wide, so compiled and NumPy distances agree bit for bit."""
+    from rtaw_marl.sim._slot_kernels import euclidean_from
+
+    r = np.arange(-1100, 1101)
+    xy = np.stack(np.meshgrid(r, [0]), -1).reshape(-1, 2)  # [P, 2]: (dx, 0)
+    targets = np.stack([np.zeros(len(r)), -r.astype(np.float64)], -1)  # [K, 2]: (0, -dy)
+    out = np.empty((len(xy), len(targets)))
+    euclidean_from(xy, targets, out)
+    assert out.tobytes() == np.hypot(r[:, None].astype(np.float64), r[None, :]).tobytes()

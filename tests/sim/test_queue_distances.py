@@ -1,0 +1,86 @@
+"""The kept fleet-to-queue and chain distances equal fresh ones at every decision."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rtaw_marl.sim.distances as distances
+from rtaw_marl.policies import MPDM
+from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.sim.core import WarehouseSim
+from rtaw_marl.sim.queue_distances import nearest_other_origin
+
+pytestmark = pytest.mark.unit
+
+
+def _sim(navigator: str, **overrides: object) -> WarehouseSim:
+    values: dict[str, object] = {"num_robots": 7, "num_tasks": 60, "queue_len": 5}
+    values.update(overrides)
+    layout = {"name": "shelves", "width": 16, "height": 12} if navigator != "direct" else {
+        "name": "open", "width": 14, "height": 14}  # fmt: skip
+    return build_sim(SimSpec.of(values, layout, navigator, "random"))
+
+
+def _check_along_episode(sim: WarehouseSim, seed: int) -> int:
+    """Play MPDM; at every decision compare the kept matrices with fresh ones."""
+    every = np.arange(sim.queue_len)
+    sim.reset(seed)
+    policy = MPDM()
+    policy.reset(seed)
+    checked = 0
+    while not sim.done:
+        np.testing.assert_array_equal(sim.distance_matrix(), sim.distance_matrix(every))
+        np.testing.assert_array_equal(sim.chain_nearest(), sim.chain_nearest(every))
+        checked += 1
+        sim.step(policy.act_sim(sim))
+    return checked
+
+
+@pytest.mark.parametrize("navigator", ["direct", "astar"])
+@pytest.mark.parametrize("mode", ["drain", "paper"])
+def test_kept_distances_equal_fresh_ones(navigator: str, mode: str) -> None:
+    sim = _sim(navigator, episode_mode=mode)
+    # Two episodes on one simulator: a reset must forget the first one's matrices.
+    assert _check_along_episode(sim, 3) == 60
+    assert _check_along_episode(sim, 4) == 60
+
+
+def test_kept_distances_with_cell_slots(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Large pools keep cells, not fields (another ``TargetSlots``): same contract."""
+    monkeypatch.setattr(distances, "SLOT_FIELDS_BYTES", 0)
+    sim = _sim("astar")
+    assert type(sim._slots).__name__ == "_CellSlots"
+    assert _check_along_episode(sim, 5) == 60
+
+
+def test_kept_distances_after_a_loaded_state() -> None:
+    """A loaded state replaces every robot and slot: nothing of the old one is kept."""
+    source, target = _sim("astar"), _sim("astar")
+    source.reset(1)
+    target.reset(2)
+    for _ in range(9):
+        source.step(int(np.flatnonzero(source.queue_mask)[0]))
+    target.distance_matrix(), target.chain_nearest()  # fill target's cache
+    target.load_state(source.state())
+    every = np.arange(target.queue_len)
+    np.testing.assert_array_equal(target.distance_matrix(), source.distance_matrix(every))
+    np.testing.assert_array_equal(target.chain_nearest(), source.chain_nearest(every))
+
+
+def test_a_caller_writing_the_returned_matrix_does_not_change_the_next_one() -> None:
+    sim = _sim("direct")
+    sim.reset(0)
+    first = sim.distance_matrix()
+    first[:] = -1.0
+    assert (sim.distance_matrix() >= 0).all()
+
+
+def test_nearest_other_origin_skips_own_and_empty_slots() -> None:
+    chain = np.array([[0.0, 4.0, 1.0], [2.0, 0.0, 9.0], [3.0, 5.0, 0.0]])
+    out = np.empty(3)
+    nearest_other_origin(chain, np.array([True, True, False]), out)
+    # Slot 0's nearest other is slot 1 (slot 2 is empty); slot 2 is empty: inf.
+    np.testing.assert_array_equal(out, [4.0, 2.0, np.inf])
+    nearest_other_origin(chain, np.array([True, False, False]), out)
+    np.testing.assert_array_equal(out, [np.inf, np.inf, np.inf])
