@@ -140,12 +140,14 @@ def read_features(
     Args:
         observation: ``{"observation": features, "action_mask": [N]}`` as ``observe`` or
             ``last()`` give it, with dict or flat features (``observation="full"`` or
-            ``"compact"``; a flat vector's layout is told by its size and ``N``).
+            ``"compact"``; a flat vector's layout is told by its size and ``N``), or
+            several agents' stacked (``[B, ...]``, as ``observe_all()`` gives them).
         keys: Feature keys to read (:data:`~rtaw_marl.decision.features.FEATURES`).
         reader: Who reads them, for the error message.
 
     Returns:
-        ``{key: float32 array of one agent's shape}`` (views, not copies).
+        ``{key: float32 array of one agent's shape}`` (``[B, ...]`` for stacked
+        observations; views, not copies).
 
     Raises:
         ConfigError: The features lack one of ``keys`` (``compact`` has no ``robots``),
@@ -153,7 +155,7 @@ def read_features(
     """
     features = observation["observation"]
     if not isinstance(features, Mapping):
-        features = _unflatten(np.asarray(features), len(observation["action_mask"]))
+        features = _unflatten(np.asarray(features), np.shape(observation["action_mask"])[-1])
     missing = [key for key in keys if key not in features]
     if missing:
         raise ConfigError(

@@ -110,3 +110,72 @@ def test_k_at_least_the_queue_is_the_unrestricted_policy() -> None:
 def test_bad_candidates_are_refused(bad: Any) -> None:
     with pytest.raises(ConfigError, match="candidates must be an integer >= 1"):
         load_policy("shelves_astar_m10_plus", candidates=bad)
+
+
+def _observations(seed: int, count: int, **env_kwargs: Any) -> list[dict[str, Any]]:
+    """``count`` acting robots' observations of one episode (copies)."""
+    env = warehouse_v1.env(navigator="astar", **{**BIG, **env_kwargs})
+    env.reset(seed=seed)
+    kept: list[dict[str, Any]] = []
+    for _ in env.agent_iter():
+        obs, _, terminated, truncated, _ = env.last()
+        if terminated or truncated or len(kept) == count:
+            break
+        features = obs["observation"]
+        copied = (
+            {k: np.array(v) for k, v in features.items()}
+            if isinstance(features, dict)
+            else np.array(features)
+        )
+        kept.append({"observation": copied, "action_mask": obs["action_mask"].copy()})
+        env.step(int(np.flatnonzero(obs["action_mask"])[-1]))
+    return kept
+
+
+def _stack(observations: list[dict[str, Any]]) -> dict[str, Any]:
+    first = observations[0]["observation"]
+    features = (
+        {k: np.stack([o["observation"][k] for o in observations]) for k in first}
+        if isinstance(first, dict)
+        else np.stack([o["observation"] for o in observations])
+    )
+    return {
+        "observation": features,
+        "action_mask": np.stack([o["action_mask"] for o in observations]),
+    }
+
+
+@pytest.mark.parametrize("name", ["shelves_astar_m10_plus", "shelves_astar_m10"])
+@pytest.mark.parametrize(("candidates", "obs_format"), [(None, "dict"), (8, "dict"), (8, "flat")])
+def test_act_batch_is_act_row_by_row(name: str, candidates: int | None, obs_format: str) -> None:
+    """One network call for 40 decisions chooses what 40 calls of ``act`` choose."""
+    policy = load_policy(name, candidates=candidates)
+    observations = _observations(2, 40, obs_format=obs_format)
+    got = policy.act_batch(_stack(observations))
+    assert got.dtype == np.int64
+    assert got.tolist() == [policy.act(o) for o in observations]
+    if candidates is not None:  # every choice is among the K nearest queued origins
+        for obs, slot in zip(observations, got, strict=True):
+            features = obs["observation"]
+            own = features["tasks"][:, 4] if isinstance(features, dict) else None
+            if own is not None:
+                key = np.where(obs["action_mask"] > 0, own, np.inf)
+                assert key[slot] <= np.sort(key)[candidates - 1]
+
+
+def test_act_batch_of_observe_all_acts_for_the_acting_robot_only() -> None:
+    policy = load_policy("shelves_astar_m10_plus")
+    env = warehouse_v1.env(navigator="astar", **BIG)
+    env.reset(seed=0)
+    env.step(0)
+    everyone = env.unwrapped.observe_all()
+    acting = env.unwrapped.sim.robot
+    got = policy.act_batch(everyone)
+    assert got[acting] == policy.act(env.observe(env.agent_selection))
+    assert (np.delete(got, acting) == -1).all()
+
+
+def test_act_batch_refuses_a_single_observation() -> None:
+    policy = load_policy("shelves_astar_m10_plus")
+    with pytest.raises(ConfigError, match=r"act_batch needs action_mask \[B, N\]"):
+        policy.act_batch(_observations(0, 1)[0])
