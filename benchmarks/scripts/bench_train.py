@@ -174,7 +174,9 @@ def end_to_end_table(quick: bool, model: str = "rtaw") -> list[str]:
     ]  # fmt: skip
     if model == "rtaw_plus":  # issue 24's targets
         targets = {10: "", 100: ">= 10,000", 1000: ">= 3,000"}
-        sizes = [(10, 1, 8192)] if quick else [(100, 2, 81920), (1000, 2, 49152)]
+        sizes = [(10, 1, 8192)] if quick else [
+            (100, 1, 81920), (100, 2, 81920), (1000, 1, 49152), (1000, 2, 49152),
+        ]  # fmt: skip
     for m, workers, frames in sizes:
         r = bench_end_to_end(m, workers, frames, quick, model=model)
         phases = " / ".join(f"{r[p]:.2f}" for p in PHASES)

@@ -270,7 +270,7 @@ class AgentViews:
         if self._stamp == sim.decisions:
             return
         # Every array once per decision: the acting view and the others' share them.
-        self._decision = Decision.of_sim(sim, FEATURES)
+        self._decision = Decision.of_sim(sim, _ALL_FEATURES)
         self._mask = sim.queue_mask.astype(np.int8)
         self._zero_mask = np.zeros(sim.queue_len, dtype=np.int8)
         self._acting = self._others = self._all = None
@@ -297,6 +297,10 @@ class AgentViews:
             return others[robot]
         # robots is the same table for every agent: hand out the [M, 3] array itself.
         return {key: self._robot_rows if key == "robots" else others[key][robot] for key in others}
+
+
+#: Every feature, as ``Decision.of_sim`` takes it at every decision.
+_ALL_FEATURES = frozenset(FEATURES)
 
 
 def _with_row(stacked: Features, row: int, features: Features) -> Features:

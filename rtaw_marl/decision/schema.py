@@ -135,8 +135,8 @@ class Decision:
     ) -> Decision:
         """``sim``'s current decision, with only the arrays that ``keys`` need; with
         ``slots int [K]``, of these queue slots only (in their order)."""
-        keys = set(keys)
-        relational = bool(keys & set(RELATIONAL_KEYS))
+        keys = keys if isinstance(keys, frozenset) else frozenset(keys)
+        relational = not keys.isdisjoint(RELATIONAL_KEYS)
         pick = slice(None) if slots is None else np.asarray(slots)
         return cls(
             sim.robot_xy, sim.robot_free_at, sim.time, sim.robot, sim.queue_rows[pick],
