@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rtaw_marl.decision.acting import acting_view
+from rtaw_marl.decision.acting import acting_view, sim_acting_view
 from rtaw_marl.decision.relational import relational_features
 from rtaw_marl.decision.schema import (
     ALL_KEYS,
@@ -250,5 +250,10 @@ def sim_observation(
     the envs give them (:func:`decision_features`), computing only what ``keys`` need;
     with ``slots int [K]``, the task entries of these slots only (the rows the full
     observation holds for them, bit for bit)."""
-    keys = tuple(keys)
-    return decision_features(Decision.of_sim(sim, keys, slots), keys)
+    keys = frozenset(keys)
+    if slots is not None:
+        return decision_features(Decision.of_sim(sim, keys, slots), keys)
+    out = sim_acting_view(sim, keys)  # every env step: the same values, fewer copies
+    if "fleet" in keys:
+        out["fleet"] = fleet_features(sim.robot_free_at, sim.time, sim.layout.scale)
+    return out

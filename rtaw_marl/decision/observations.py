@@ -31,6 +31,7 @@ from rtaw_marl.decision.features import (
     decision_features,
     feature_shapes,
     robot_features,
+    sim_observation,
 )
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.core import WarehouseSim
@@ -269,20 +270,19 @@ class AgentViews:
         sim = self.sim
         if self._stamp == sim.decisions:
             return
-        # Every array once per decision: the acting view and the others' share them.
-        self._decision = Decision.of_sim(sim, _ALL_FEATURES)
         self._mask = sim.queue_mask.astype(np.int8)
         self._zero_mask = np.zeros(sim.queue_len, dtype=np.int8)
         self._acting = self._others = self._all = None
         self._stamp = sim.decisions
 
     def _acting_view(self) -> Features:
-        return self._format(decision_features(self._decision, self.layout.keys))
+        return self._format(sim_observation(self.sim, self.layout.keys))
 
     def _other_views(self) -> Features:
         """Every robot's view at once: ``[M, ...]`` per feature (or ``[M, flat_size]``)."""
         viewers = np.arange(self.sim.num_robots)
-        features = decision_features(self._decision, (*self.layout.keys, "agent"), viewers)
+        decision = Decision.of_sim(self.sim, _ALL_FEATURES)
+        features = decision_features(decision, (*self.layout.keys, "agent"), viewers)
         self._robot_rows = features["agent"]  # [M, 3]: every robot's row, writable
         return self._format(features)
 

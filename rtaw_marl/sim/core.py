@@ -253,16 +253,17 @@ class WarehouseSim:
             self._dist = self._slots.distances_from_one(int(x), int(y))
         return self._dist
 
-    def distance_matrix(self, slots: np.ndarray | None = None) -> np.ndarray:
+    def distance_matrix(self, slots: np.ndarray | None = None, *, copy: bool = True) -> np.ndarray:
         """Distances ``float64 [M, N]`` from every robot's cell to each queued origin
         (``[M, K]`` to the origins of ``slots int [K]`` only, when given).
 
         The whole matrix is kept between decisions and updated where robots or slots
-        changed (:class:`~rtaw_marl.sim.queue_distances.QueueDistances`); this returns a
-        copy."""
+        changed (:class:`~rtaw_marl.sim.queue_distances.QueueDistances`); ``copy=False``
+        returns the kept matrix itself: read it before the next step, never write it."""
         if slots is not None:
             return self._slots.distances_from(self.robot_xy, slots)
-        return self._queue_distances.fleet(self.robot_xy).copy()
+        kept = self._queue_distances.fleet(self.robot_xy)
+        return kept.copy() if copy else kept
 
     def free_robots(self) -> np.ndarray:
         """``int64 [F]`` the robots free at the current decision, the selected one
@@ -284,12 +285,13 @@ class WarehouseSim:
         origin (columns): how well one task leads into another. Empty slots: meaningless."""
         return self._slots.distances_from(self.queue_rows[:, 2:])
 
-    def chain_nearest(self, slots: np.ndarray | None = None) -> np.ndarray:
+    def chain_nearest(self, slots: np.ndarray | None = None, *, copy: bool = True) -> np.ndarray:
         """``float64 [N]`` (or ``[K]`` for ``slots int [K]``): the distance from each
         queued destination to the nearest origin of *another* queued task, ``inf`` when
         there is none (or the slot is empty). ``O(K N)`` distance lookups."""
         if slots is None:
-            return self._queue_distances.chain_nearest(self.queue_rows, self.queue_mask).copy()
+            kept = self._queue_distances.chain_nearest(self.queue_rows, self.queue_mask)
+            return kept.copy() if copy else kept  # copy=False: as distance_matrix's
         rows = np.asarray(slots)
         chain = self._slots.distances_from(self.queue_rows[rows, 2:])  # [K, N]
         other = np.broadcast_to(self.queue_mask, chain.shape).copy()

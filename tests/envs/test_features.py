@@ -192,3 +192,29 @@ def test_compiled_hypot_equals_numpy_on_every_grid_difference() -> None:
     out = np.empty((len(xy), len(targets)))
     euclidean_from(xy, targets, out)
     assert out.tobytes() == np.hypot(r[:, None].astype(np.float64), r[None, :]).tobytes()
+
+
+@pytest.mark.parametrize("navigator", ["direct", "astar"])
+@pytest.mark.parametrize(
+    "keys", [("robots", "tasks", "agent", "relations", "rivals", "fleet"), ("relations", "rivals")]
+)
+def test_observation_read_from_the_simulator_equals_the_decision_path(
+    navigator: str, keys: tuple[str, ...]
+) -> None:
+    """``sim_observation`` (every env step: read straight from the simulator, its kept
+    distances uncopied) equals ``decision_features`` of ``Decision.of_sim``."""
+    from rtaw_marl.decision.features import Decision, decision_features, sim_observation
+
+    env = warehouse_v1.env(num_robots=12, num_tasks=50, navigator=navigator, tasks="random")
+    env.reset(seed=5)
+    sim = env.unwrapped.sim
+    steps = 0
+    while not sim.done:
+        got = sim_observation(sim, keys)
+        want = decision_features(Decision.of_sim(sim, keys), keys)
+        assert set(got) == set(want) == {*keys, "action_mask"}
+        for key, value in want.items():
+            assert got[key].tobytes() == value.tobytes(), key
+        sim.step(int(np.flatnonzero(sim.queue_mask)[-1]))
+        steps += 1
+    assert steps == 50
