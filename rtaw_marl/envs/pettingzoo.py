@@ -43,6 +43,8 @@ the same robot may act several times in a row.
 
 `env.unwrapped.observe_all()` returns every agent's observation at once, stacked in
 `possible_agents` order: `{"observation": features [M, ...], "action_mask": [M, N]}`.
+A learned policy decides for stacked observations with one network call:
+`load_policy(name).act_batch(observations)` (`-1` for rows with an all-zero mask).
 
 Features are float32. Lengths and times are divided by the layout scale `L = max(W, H)`
 (robots move one cell per second); coordinates use `x` = column, `y` = row.
