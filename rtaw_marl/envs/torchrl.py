@@ -274,8 +274,9 @@ class BatchedWarehouseEnv(EnvBase):
         if self._own:
             self._dist[i] = sim.robot_distances()
         if self._relational:
-            self._all_dist[i] = sim.distance_matrix()
-            self._nearest[i] = sim.chain_nearest()
+            # The simulator's kept arrays, copied once, into the batch.
+            self._all_dist[i] = sim.distance_matrix(copy=False)
+            self._nearest[i] = sim.chain_nearest(copy=False)
             self._wait[i] = sim.queue_waits()
 
     def _observation(self) -> TensorDict:
