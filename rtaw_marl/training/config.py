@@ -281,7 +281,9 @@ class TrainConfig(SimGroups):
         frames: Total frames (decisions) to collect: a whole number of batches of
             ``algo.frames_per_batch``, never rounded (the paper's budget, 4M, in whole
             batches of 8192 and of 512: 4,005,888).
-        torch_threads: torch intra-op threads (1 is fastest for this small network).
+        torch_threads: torch intra-op threads of the learner and the in-process
+            collector (1 is fastest for the paper's network; RTAW+'s update runs 1.7x
+            faster with 2 on two cores, docs/performance.md).
         device: Where the learner updates the networks: ``auto`` (``cuda`` when torch
             finds a GPU, else ``cpu``), ``cpu`` or ``cuda``. Collection and evaluation
             run on CPUs.
