@@ -197,14 +197,20 @@ class NetworkPolicy:
             (``observe_all()``'s rows of robots that are not acting).
 
         Raises:
-            ConfigError: The mask is not ``[B, N]``, or the observation lacks a feature
-                the network reads.
+            ConfigError: The mask is not ``[B, N]``, an entry does not hold the same
+                ``B`` decisions, or the observation lacks a feature the network reads.
         """
         mask = np.asarray(observation["action_mask"]).astype(bool)
         if mask.ndim != 2:
             raise ConfigError(f"act_batch needs action_mask [B, N], got shape {mask.shape}")
         features = read_features(observation, self._features, self.name)
         inputs = [features[key] for key in self._features]
+        for key, x in zip(self._features, inputs, strict=True):
+            if x.shape[:1] != mask.shape[:1]:
+                raise ConfigError(
+                    f"act_batch: {key} has shape {x.shape}, but action_mask {mask.shape}: "
+                    "every entry needs the same B decisions first"
+                )
         slots = None
         if self.candidates is not None and mask.shape[1] > self.candidates:
             # Per row, candidate_slots' choice: the K nearest, ties to the lower slot.

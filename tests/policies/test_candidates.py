@@ -179,3 +179,11 @@ def test_act_batch_refuses_a_single_observation() -> None:
     policy = load_policy("shelves_astar_m10_plus")
     with pytest.raises(ConfigError, match=r"act_batch needs action_mask \[B, N\]"):
         policy.act_batch(_observations(0, 1)[0])
+
+
+def test_act_batch_refuses_entries_of_other_batch_sizes() -> None:
+    policy = load_policy("shelves_astar_m10_plus")
+    stacked = _stack(_observations(0, 3))
+    stacked["action_mask"] = stacked["action_mask"][:2]
+    with pytest.raises(ConfigError, match=r"act_batch: relations has shape \(3, 60, 8\)"):
+        policy.act_batch(stacked)
