@@ -1,11 +1,13 @@
-"""Compiled kernel of the acting robot's whole observation: one call per decision.
+"""Compiled kernel of the acting robot's coordinate entries (``robots``, ``agent``,
+``tasks``); its relational ones are :func:`~rtaw_marl.decision._rivals.actor_relations`.
 
 :func:`~rtaw_marl.decision.features.decision_features` builds the acting robot's view
 on every env step. In NumPy that is some thirty small array operations whose overhead,
 not their arithmetic, was most of an AEC step at ``M = 100`` (34 us of 110). This
-kernel writes every entry in one pass with the same float operations in the same order
-(``float64`` arithmetic, one rounding to ``float32`` at the end), so its output equals
-the NumPy form's bit for bit; the tests compare the two on batches of decisions.
+kernel and the relational one write every entry in one pass with the same float
+operations in the same order (``float64`` arithmetic, one rounding to ``float32`` at
+the end), so their output equals the NumPy form's bit for bit; the tests compare the
+two on batches of decisions.
 """
 
 from __future__ import annotations
@@ -13,9 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from rtaw_marl.decision._rivals import actor_relations
-
-__all__ = ["acting_features", "acting_relations"]
+__all__ = ["acting_features"]
 
 
 @njit(cache=True, nogil=True)
@@ -67,33 +67,3 @@ def acting_features(
                     tasks[p, t, c] = rows[p, t, c] / scale
                 tasks[p, t, 4] = (own[p, t] if mask[p, t] else 0.0) / scale
                 tasks[p, t, 5] = lengths[p, t] / scale
-
-
-@njit(cache=True, nogil=True)
-def acting_relations(
-    dist: np.ndarray,
-    free_at: np.ndarray,
-    time: np.ndarray,
-    robot: np.ndarray,
-    lengths: np.ndarray,
-    waits: np.ndarray,
-    nearest: np.ndarray,
-    mask: np.ndarray,
-    scale: float,
-    k: int,
-    missing: float,
-    temperature: float,
-    rel: np.ndarray,
-    rivals: np.ndarray,
-) -> None:
-    """:func:`~rtaw_marl.decision._rivals.actor_relations` from the free times:
-    ``free_at float64 [P, M]`` and ``time float64 [P]`` instead of the clipped times
-    until free (``max(free_at - time, 0)``, computed here)."""
-    p_count, m = free_at.shape
-    rem = np.empty((p_count, m))
-    for p in range(p_count):
-        for r in range(m):
-            rem[p, r] = max(free_at[p, r] - time[p], 0.0)
-    actor_relations(
-        dist, rem, robot, lengths, waits, nearest, mask, scale, k, missing, temperature, rel, rivals
-    )

@@ -63,7 +63,8 @@ def first_rivals(
 @njit(cache=True, nogil=True)
 def actor_relations(
     dist: np.ndarray,
-    rem: np.ndarray,
+    free_at: np.ndarray,
+    time: np.ndarray,
     who: np.ndarray,
     lengths: np.ndarray,
     waits: np.ndarray,
@@ -83,16 +84,22 @@ def actor_relations(
     :func:`first_rivals`, then each task's 8 relations and ``K`` rival tokens.
 
     Args:
-        dist: ``float64 [P, M, N]``; rem: ``float64 [P, M]`` (clipped at 0); who:
-            ``int64 [P]``; lengths, waits: ``float64 [P, N]``; nearest: ``float64
-            [P, N]`` (``inf``: no other task); mask: ``bool [P, N]``.
+        dist: ``float64 [P, M, N]``; free_at: ``float64 [P, M]`` when each robot is
+            free; time: ``float64 [P]`` the decisions' times (each robot's time until
+            free is ``max(free_at - time, 0)``); who: ``int64 [P]``; lengths, waits:
+            ``float64 [P, N]``; nearest: ``float64 [P, N]`` (``inf``: no other task);
+            mask: ``bool [P, N]``.
         scale: ``L``. k: rivals kept (``min(K, M - 1)``). missing: the value of a missing
             rival or chain, in cells (``MISSING * L``). temperature: the soft-min's, in
             cells.
         rel: ``float32 [P, N, 8]``, overwritten. rivals: ``float32 [P, N, K, 4]``,
             overwritten (rows past ``k`` and of empty slots zero).
     """
-    p_count, n = dist.shape[0], dist.shape[2]
+    p_count, m, n = dist.shape
+    rem = np.empty((p_count, m))
+    for p in range(p_count):
+        for r in range(m):
+            rem[p, r] = max(free_at[p, r] - time[p], 0.0)
     order = np.zeros((p_count, n, max(k, 1)), np.int64)
     delta = np.zeros((p_count, n, max(k, 1)))
     if k:

@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rtaw_marl.decision._acting import acting_features, acting_relations
+from rtaw_marl.decision._acting import acting_features
+from rtaw_marl.decision._rivals import actor_relations
 from rtaw_marl.decision.schema import (
     MISSING,
     NUM_RIVALS,
@@ -36,7 +37,7 @@ def acting_view(d: Decision, keys: Set[str]) -> dict[str, np.ndarray]:
     """The entries ``keys`` (``fleet`` aside) and ``action_mask`` of the acting robots'
     views (:func:`~rtaw_marl.decision.features.decision_features`): compiled
     (:func:`~rtaw_marl.decision._acting.acting_features`,
-    :func:`~rtaw_marl.decision._acting.acting_relations`), the same values as the NumPy
+    :func:`~rtaw_marl.decision._rivals.actor_relations`), the same values as the NumPy
     functions of :mod:`~rtaw_marl.decision.features` compute for them (tested bit for
     bit)."""
     lead, m, n = d.free_at.shape[:-1], d.free_at.shape[-1], d.queue_mask.shape[-1]
@@ -113,7 +114,7 @@ def _view(
     if distances is not None:
         rel = np.empty((p, n, len(RELATION_FEATURES)), dtype=np.float32)
         rivals = np.empty((p, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float32)
-        acting_relations(
+        actor_relations(
             distances, free_at, time, robot, lengths, waits, nearest, mask, float(scale),
             min(NUM_RIVALS, m - 1), MISSING * scale, SOFTMIN_TEMPERATURE * scale, rel, rivals,
         )  # fmt: skip

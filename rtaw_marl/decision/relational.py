@@ -69,7 +69,8 @@ def relational_features(
         rel32 = np.empty((p, n, len(RELATION_FEATURES)), dtype=np.float32)
         rivals32 = np.empty((p, n, NUM_RIVALS, len(RIVAL_FEATURES)), dtype=np.float32)
         actor_relations(
-            np.ascontiguousarray(dist, dtype=np.float64), np.ascontiguousarray(rem),
+            np.ascontiguousarray(dist, dtype=np.float64),
+            np.ascontiguousarray(remaining, dtype=np.float64).reshape(p, m), np.zeros(p),
             np.ascontiguousarray(who[:, 0], dtype=np.int64),
             np.ascontiguousarray(lengths, dtype=np.float64).reshape(p, n),
             np.ascontiguousarray(waits, dtype=np.float64).reshape(p, n),
