@@ -304,9 +304,9 @@ class TrainConfig(SimGroups):
         progress: Show a tqdm progress bar.
         interop: Train through TorchRL's PettingZooWrapper on the AEC env (small M).
         mix: Train on several scenarios at once (a generalist): member scenarios, each
-            ``NAME`` or ``NAME:m30:n5:t200:paper`` (robots, queue slots, tasks, episode
-            mode changed; :mod:`rtaw_marl.scenarios.mix`); every
-            collector's batch holds ``collector.envs_per_worker / len(mix)`` simulators
+            ``NAME`` or ``NAME:m30:n5:t200:paper:s90:random`` (robots, queue slots, tasks,
+            episode mode, generated layout size, task stream changed;
+            :mod:`rtaw_marl.scenarios.mix`); every collector's batch holds ``collector.envs_per_worker / len(mix)`` simulators
             of each. Empty: the run's own scenario alone. The run's scenario still
             picks the checkpoints (``selection.*``). Needs ``model=rtaw_plus`` with
             ``model.fleet_summary=true`` (or ``model.critic_fleet=false``).
