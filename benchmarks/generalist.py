@@ -18,7 +18,7 @@ from pathlib import Path
 
 from benchmarks.study import Cell, PolicyRef, Study, StudyResult, learned, rule
 from benchmarks.tables import (
-    STRONGEST,
+    BEST,
     TABLE1,
     TABLE2,
     compare,
@@ -27,19 +27,34 @@ from benchmarks.tables import (
     pooled,
     pooled_share,
     share,
+    stored_best,
     wins,
+    with_best,
 )
 from rtaw_marl.evaluation.report import markdown_table
 from rtaw_marl.scenarios import SCENARIOS, Scenario
 
-__all__ = ["GENERALIST_STUDIES", "SHARED_MAPS", "custom_scenario", "shared_map"]
+__all__ = [
+    "GENERALIST_STUDIES",
+    "HOLDOUT_ROW",
+    "SHARED_MAPS",
+    "custom_scenario",
+    "shared_map",
+    "unseen_settings",
+]
 
 #: The generalist's label in the tables, and its shipped name.
 LABEL, NAME = "generalist", "generalist_plus"
 #: The maps the unseen settings read (relative to the repository root).
 SHARED_MAPS = Path("..") / "shared" / "maps"
 #: Each row's comparisons: the generalist against these.
-AGAINST = ("MPDM", "lookahead", STRONGEST, "RTAW+")
+AGAINST = ("MPDM", "lookahead", BEST, "RTAW+")
+#: The unseen settings that are rows of the search tables' hold-out grid, under its names
+#: (the same scenario and seeds: the same episodes); their best rule is stored there.
+HOLDOUT_ROW = {
+    "layout C, queue of 20, M=30": "layout C, queue 20, M=30",
+    "LoRR warehouse_large, M=1000": "LoRR warehouse_large, M=1000, paper",
+}
 
 
 def _alone(s: Scenario, key: str, seeds: Sequence[int]) -> Cell:
@@ -72,14 +87,17 @@ def _paired(result: StudyResult, stored: Mapping[str, StudyResult], name: str) -
     return rows
 
 
-def _rows_table(rows: Mapping[str, Mapping[str, Sequence[float]]], shares: bool) -> str:
+def _rows_table(
+    rows: Mapping[str, Mapping[str, Sequence[float]]], best: Mapping[str, str], shares: bool
+) -> str:
     cols = [c for c in ("MPDM", "lookahead", "RTAW+", LABEL) if any(c in t for t in rows.values())]
-    head = ["setting", *cols, *(f"{LABEL} vs {b}" for b in AGAINST)]
+    head = ["setting", *cols, "best rule (seeds 1000-1019)"]
+    head += [f"{LABEL} vs {b}" for b in AGAINST]
     if shares:
         head.append(f"hindsight share: RTAW+ / {LABEL}")
     table = []
     for key, t in rows.items():
-        cells = [key.replace("|", ", "), *(mean_cell(t, c) for c in cols)]
+        cells = [key.replace("|", ", "), *(mean_cell(t, c) for c in cols), best.get(key, "-")]
         cells += [compare(t, b, LABEL) for b in AGAINST]
         if shares:
             cells.append(f"{share(t, 'RTAW+')} / {share(t, LABEL)}")
@@ -97,8 +115,8 @@ def _pooled_lines(rows: Sequence[Mapping[str, Sequence[float]]], what: str) -> l
 
 
 def _table1(result: StudyResult, stored: Mapping[str, StudyResult]) -> str:
-    rows = _paired(result, stored, "table1")
-    parts = [_rows_table(rows, shares=True), ""]
+    rows, best = with_best(_paired(result, stored, "table1"), stored_best("table1"))
+    parts = [_rows_table(rows, best, shares=True), ""]
     for mode in ("paper", "drain"):
         part = [t for k, t in rows.items() if k.startswith(f"{mode}|")]
         parts += _pooled_lines(part, f"Table I, {mode} mode")
@@ -113,9 +131,9 @@ def _table1(result: StudyResult, stored: Mapping[str, StudyResult]) -> str:
 
 
 def _table2(result: StudyResult, stored: Mapping[str, StudyResult]) -> str:
-    rows = _paired(result, stored, "table2")
+    rows, best = with_best(_paired(result, stored, "table2"), stored_best("table2"))
     return "\n".join(
-        [_rows_table(rows, shares=False), "", *_pooled_lines(list(rows.values()), "Table II")]
+        [_rows_table(rows, best, shares=False), "", *_pooled_lines(list(rows.values()), "Table II")]
     )
 
 
@@ -124,7 +142,7 @@ def shared_map(*parts: str) -> dict[str, str]:
     return {"name": "file", "path": str(SHARED_MAPS.joinpath(*parts))}
 
 
-def _unseen() -> dict[str, tuple[Scenario, str]]:
+def unseen_settings() -> dict[str, tuple[Scenario, str]]:
     """The unseen settings: key -> (scenario, the nearest specialist's shipped name)."""
     c, big = SCENARIOS["C_astar_m10"], SCENARIOS["C256_astar_m1000_random"]
     movingai = shared_map("movingai", "warehouse-10-20-10-2-1.map")
@@ -168,7 +186,7 @@ def custom_scenario(name: str, layout: dict, sim: dict) -> Scenario:
 
 def _unseen_cells(seeds: Sequence[int]) -> list[Cell]:
     cells = []
-    for key, (s, specialist) in _unseen().items():
+    for key, (s, specialist) in unseen_settings().items():
         policies: dict[str, PolicyRef] = {
             "MPDM": rule("mpdm"), "lookahead": rule("lookahead"),
             "RTAW+": learned(specialist), LABEL: learned(NAME),
@@ -178,11 +196,13 @@ def _unseen_cells(seeds: Sequence[int]) -> list[Cell]:
 
 
 def _unseen_render(result: StudyResult, _: Mapping[str, StudyResult]) -> str:
-    specialists = "\n".join(f"- {k}: RTAW+ = `{v[1]}`" for k, v in _unseen().items())
-    rows = result.ttd
+    specialists = "\n".join(f"- {k}: RTAW+ = `{v[1]}`" for k, v in unseen_settings().items())
+    rows, best = with_best(
+        result.ttd, stored_best("holdout", "unseen"), key=lambda k: HOLDOUT_ROW.get(k, k)
+    )
     return "\n".join(
         [
-            _rows_table(rows, shares=False), "", *_pooled_lines(list(rows.values()), "them"),
+            _rows_table(rows, best, shares=False), "", *_pooled_lines(list(rows.values()), "them"),
             "", "The specialist of each row (the nearest shipped RTAW+):", "", specialists,
         ]
     )  # fmt: skip

@@ -16,9 +16,9 @@ from benchmarks.analysis import ANALYSIS
 from benchmarks.generalist import GENERALIST_STUDIES
 from benchmarks.study import Cell, PolicyRef, Study, StudyResult, learned, rule
 from benchmarks.tables import (
+    BEST,
     LEARNED,
     SHARES,
-    STRONGEST,
     TABLE1,
     TABLE2,
     compare,
@@ -30,7 +30,9 @@ from benchmarks.tables import (
     share,
     share_line,
     shares,
+    stored_best,
     vs,
+    with_best,
 )
 from rtaw_marl.errors import lookup
 from rtaw_marl.evaluation.report import markdown_table
@@ -67,8 +69,14 @@ def _table1_cells(mode: str) -> Callable[[Sequence[int]], list[Cell]]:
     return cells
 
 
-def _section(result: StudyResult, _: Mapping[str, StudyResult]) -> str:
-    return section(result.ttd)
+def _table1_section(mode: str) -> Callable[[StudyResult, Mapping[str, StudyResult]], str]:
+    """Table I in ``mode``, against each row's best rule (``search_table1.json``)."""
+
+    def render(result: StudyResult, _: Mapping[str, StudyResult]) -> str:
+        rows, best = with_best(result.ttd, stored_best("table1"), key=lambda k: f"{mode}|{k}")
+        return section(rows, best)
+
+    return render
 
 
 def _table2_cells(seeds: Sequence[int]) -> list[Cell]:
@@ -88,7 +96,8 @@ def _table2(result: StudyResult, _: Mapping[str, StudyResult]) -> str:
     for key in result.ttd:
         secs = result.seconds.get(key, {})
         wall.append(f"- {key}: " + ", ".join(f"{k} {v:.1f}" for k, v in secs.items()))
-    return section(result.ttd) + "\n" + "\n".join(wall)
+    rows, best = with_best(result.ttd, stored_best("table2"))
+    return section(rows, best) + "\n" + "\n".join(wall)
 
 
 def _table2_hindsight_cells(seeds: Sequence[int]) -> list[Cell]:
@@ -219,6 +228,7 @@ def _budget(result: StudyResult, stored: Mapping[str, StudyResult]) -> str:
         for key, row in stored[f"table1_{mode}"].ttd.items():
             bases = result.ttd[f"{mode}|{key}"]
             rows[f"{mode}|{key}"] = {**row, **{BASE[n]: bases[n] for n in LEARNED}}
+    rows, _ = with_best(rows, stored_best("table1"))
     head = ["row", "mode", "RTAW+: 3x vs 1x", "RTAW: 3x vs 1x", "RTAW+ vs RTAW at 1x",
             "RTAW+ vs RTAW at 3x", "hindsight share 1x -> 3x: RTAW / RTAW+"]  # fmt: skip
     table = []
@@ -237,8 +247,8 @@ def _budget(result: StudyResult, stored: Mapping[str, StudyResult]) -> str:
     ]
     for label in (*BASE.values(), *LEARNED):
         lines.append(
-            f"- {label} vs MPDM: {pooled(r, 'MPDM', label)}; vs the strongest rule: "
-            f"{pooled(r, STRONGEST, label)}; hindsight share {percent(pooled_share(r, label))}"
+            f"- {label} vs MPDM: {pooled(r, 'MPDM', label)}; vs the best rule: "
+            f"{pooled(r, BEST, label)}; hindsight share {percent(pooled_share(r, label))}"
         )
     pooled_head = "Pooled over both modes (n = row-seed pairs):"
     return markdown_table(head, table) + f"\n\n{pooled_head}\n\n" + "\n".join(lines)
@@ -282,9 +292,9 @@ STUDIES: dict[str, Study] = {
     s.name: s
     for s in (
         Study(name="table1_paper", description="Table I, the paper's episode mode",
-              cells=_table1_cells("paper"), render=_section),
+              cells=_table1_cells("paper"), render=_table1_section("paper")),
         Study(name="table1_drain", description="Table I, drain mode",
-              cells=_table1_cells("drain"), render=_section),
+              cells=_table1_cells("drain"), render=_table1_section("drain")),
         Study(name="table2", description="Table II: 500 and 1,000 robots, 5,000 tasks",
               cells=_table2_cells, render=_table2),
         Study(name="table2_hindsight", description="Table II's hindsight reference",

@@ -9,7 +9,9 @@ ratio of means (:func:`~rtaw_marl.evaluation.stats.pooled_hindsight_share`).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import json
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -24,11 +26,10 @@ from rtaw_marl.evaluation.stats import (
 from rtaw_marl.scenarios import ROWS
 
 __all__ = [
+    "BEST",
     "LEARNED",
     "ORDER",
-    "RULES",
     "SHARES",
-    "STRONGEST",
     "TABLE1",
     "TABLE2",
     "compare",
@@ -41,8 +42,9 @@ __all__ = [
     "share",
     "share_line",
     "shares",
-    "strongest_rule",
+    "stored_best",
     "vs",
+    "with_best",
 ]
 
 Row = Mapping[str, Sequence[float]]
@@ -58,10 +60,14 @@ TABLE2 = [f"{grid}_m{m}_random" for m in (500, 1000) for grid in ("open300_direc
 RULE_LABELS = ("MPDM", "RBTS", "lookahead", "hungarian", "hindsight")
 LEARNED = ("RTAW", "RTAW+")
 ORDER = (*RULE_LABELS, *LEARNED)
-#: Candidates for the strongest rule of a row.
-RULES = ("RBTS", "lookahead", "hungarian")
-#: Stands for the strongest rule of each row in a comparison.
-STRONGEST = "the strongest rule"
+#: The column of each row's bar: the best rule of its setting, chosen on the selection
+#: seeds 1000-1019 among MPDM, RBTS, lookahead, hungarian and batch, and played on the
+#: evaluation seeds (:func:`stored_best`, :func:`with_best`).
+BEST = "the best rule"
+#: The stored per-seed results (``search_<part>.json`` hold each row's best rule).
+DATA = Path(__file__).with_name("data")
+#: The tables' labels of the rules' names.
+RULE_LABEL = {"mpdm": "MPDM", "rbts": "RBTS"}
 #: Policies whose hindsight share the tables show.
 SHARES = ("lookahead", *LEARNED)
 
@@ -83,28 +89,56 @@ def shares(row: Row) -> str:
     return " / ".join(share(row, p) for p in SHARES)
 
 
-def strongest_rule(row: Row) -> str:
-    """The rule with the lowest mean TTD of the row."""
-    candidates = (r for r in RULES if r in row)
-    return min(candidates, key=lambda r: float(np.mean(row[r])), default="-")
+def stored_best(*parts: str, data: Path | None = None) -> dict[str, tuple[str, list[float]]]:
+    """Row key -> (its best rule, that rule's TTDs on the evaluation seeds), as
+    ``benchmarks/scripts/search_tables.py`` chose and played them (``search_<part>.json``
+    in ``data``, default :data:`DATA`)."""
+    data = DATA if data is None else data
+    out = {}
+    for part in parts:
+        for key, row in json.loads((data / f"search_{part}.json").read_text())["rows"].items():
+            name = row["best_rule"]["name"]
+            out[key] = (RULE_LABEL.get(name, name), [float(v) for v in row["ttd"][name]])
+    return out
 
 
-def _baseline(row: Row, base: str) -> str:
-    return strongest_rule(row) if base == STRONGEST else base
+def with_best(
+    rows: Mapping[str, Row],
+    best: Mapping[str, tuple[str, Sequence[float]]],
+    key: Callable[[str], str] = str,
+) -> tuple[dict[str, Row], dict[str, str]]:
+    """``rows`` with their best rule's TTDs as column :data:`BEST`, and the rule's name
+    per row; rows whose ``key(row key)`` has no stored choice are left without.
+
+    Raises:
+        ValueError: A row holds the chosen rule with other TTDs than the stored ones on
+            the seeds both have (then they are not the same episodes).
+    """
+    out: dict[str, Row] = {}
+    names: dict[str, str] = {}
+    for k, row in rows.items():
+        if key(k) not in best:
+            out[k] = row
+            continue
+        name, ttd = best[key(k)]
+        n = min(len(ttd), *(len(v) for v in row.values()))
+        if name in row and [float(v) for v in row[name][:n]] != list(ttd[:n]):
+            raise ValueError(f"{k}: the stored {name} TTDs differ from this row's")
+        out[k] = {**{c: v[:n] for c, v in row.items()}, BEST: ttd[:n]}
+        names[k] = name
+    return out, names
 
 
 def compare(row: Row, base: str, other: str) -> str:
-    """:func:`vs` of ``other`` against ``base`` (or :data:`STRONGEST`, then named), or ``-``."""
-    rule = _baseline(row, base)
-    if rule not in row or other not in row:
+    """:func:`vs` of ``other`` against ``base``, or ``-``."""
+    if base not in row or other not in row:
         return "-"
-    cell = vs(row[rule], row[other])
-    return f"{rule}: {cell}" if base == STRONGEST else cell
+    return vs(row[base], row[other])
 
 
 def pooled_diff(rows: Sequence[Row], base: str, other: str) -> PairedDiff | None:
     """``other`` against ``base`` pooled over the rows that have both."""
-    pairs = [(t[b], t[other]) for t in rows if (b := _baseline(t, base)) in t and other in t]
+    pairs = [(t[base], t[other]) for t in rows if base in t and other in t]
     return pooled_difference(pairs)
 
 
@@ -155,27 +189,35 @@ def wins(rows: Sequence[Row], base: str, other: str = "RTAW+") -> str:
 
 #: The paired comparisons of each row, (policy, baseline).
 COMPARISONS = [("RTAW+", "MPDM"), ("RTAW+", "RBTS"), ("RTAW+", "hungarian"),
-               ("RTAW+", "lookahead"), ("RTAW", "MPDM"), ("RTAW", STRONGEST)]  # fmt: skip
+               ("RTAW+", "lookahead"), ("RTAW", "MPDM"), ("RTAW", BEST)]  # fmt: skip
 #: The pooled lines of a section, (policy, baseline).
-POOLED = [*COMPARISONS[:4], ("RTAW+", STRONGEST), *COMPARISONS[4:], ("lookahead", "MPDM")]
+POOLED = [*COMPARISONS[:4], ("RTAW+", BEST), *COMPARISONS[4:], ("lookahead", "MPDM")]
 
 
-def section(rows: Mapping[str, Row]) -> str:
-    """Mean TTDs and hindsight shares, paired comparisons, then the pooled lines."""
+def section(rows: Mapping[str, Row], best: Mapping[str, str] | None = None) -> str:
+    """Mean TTDs and hindsight shares, paired comparisons, then the pooled lines;
+    ``best`` names each row's best rule (:func:`with_best`). Rows without a stored best
+    rule (none given) have no comparison with it."""
     means = markdown_table(
         ["setting", *ORDER, "hindsight share: " + " / ".join(SHARES)],
         [[k, *(mean_cell(t, p) for p in ORDER), shares(t)] for k, t in rows.items()],
     )
+    pairs = COMPARISONS if best else [c for c in COMPARISONS if c[1] != BEST]
+    named = ["best rule (seeds 1000-1019)"] if best else []
     comparisons = markdown_table(
-        ["setting", *(f"{o} vs {b}" for o, b in COMPARISONS)],
-        [[k, *(compare(t, b, o) for o, b in COMPARISONS)] for k, t in rows.items()],
+        ["setting", *named, *(f"{o} vs {b}" for o, b in pairs)],
+        [
+            [k, *([best.get(k, "-")] if best else []), *(compare(t, b, o) for o, b in pairs)]
+            for k, t in rows.items()
+        ],
     )
-    return f"{means}\n\n{comparisons}\n\n" + "\n".join(summary(list(rows.values())))
+    return f"{means}\n\n{comparisons}\n\n" + "\n".join(summary(list(rows.values()), bool(best)))
 
 
-def summary(rows: Sequence[Row]) -> list[str]:
-    """Pooled comparisons and shares, RTAW+'s wins per row and its goals."""
-    lines = [f"- {o} vs {b}, pooled: {pooled(rows, b, o)}" for o, b in POOLED]
+def summary(rows: Sequence[Row], best: bool = True) -> list[str]:
+    """Pooled comparisons (with the best rule only if ``best``) and shares, RTAW+'s wins
+    per row and its goals."""
+    lines = [f"- {o} vs {b}, pooled: {pooled(rows, b, o)}" for o, b in POOLED if best or b != BEST]
     lines.append(share_line(rows))
     lines += [wins(rows, b) for b in ("lookahead", "MPDM", "RBTS")]
     d, s = pooled_diff(rows, "MPDM", "RTAW+"), pooled_share(rows, "RTAW+")

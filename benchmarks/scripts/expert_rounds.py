@@ -4,10 +4,12 @@ Usage::
 
     python -m benchmarks.scripts.expert_rounds generalist_plus runs/expert/round1/checkpoints/best.pt
     python -m benchmarks.scripts.expert_rounds A B --width 2 --horizon 3 --seeds 10
+    python -m benchmarks.scripts.expert_rounds A B --settings C_astar_m10:n15 A_astar_m10:s80:random
 
 Each policy (a checkpoint or shipped name) plays alone and searched
 (``load_search(width, horizon)``) on the settings of
-:mod:`benchmarks.scripts.search_defaults` over the selection seeds 1000.. (never an
+:mod:`benchmarks.scripts.search_defaults` (or ``--settings``: mix members) over the
+selection seeds 1000.. (never an
 evaluation seed), beside the best rule there (least mean TTD among
 :data:`~rtaw_marl.evaluation.best_rule.DEFAULT_RULES` on the same seeds: a bar for the
 eye, not a selection). Prints each one's pooled paired TTD difference against the first
@@ -41,10 +43,11 @@ def main() -> None:
     parser.add_argument("--horizon", type=int, default=3)
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--output", type=Path, default=None)
+    parser.add_argument("--settings", nargs="+", default=list(SETTINGS), help="mix members")
     args = parser.parse_args()
     seeds = list(range(1000, 1000 + args.seeds))
     ttd: dict[str, dict[str, list[float]]] = {}
-    for setting in SETTINGS:
+    for setting in args.settings:
         sim = build_sim(member_spec(setting))
         policies = {r: make_baseline(r) for r in DEFAULT_RULES}
         for i, source in enumerate(args.policies):

@@ -3,7 +3,7 @@
 Usage::
 
     python -m benchmarks.scripts.search_tables table1            # Table I, both modes
-    python -m benchmarks.scripts.search_tables table2 default holdout
+    python -m benchmarks.scripts.search_tables table2 default holdout unseen
     python -m benchmarks.scripts.search_tables holdout --network runs/x/best.pt --only M=3
     python -m benchmarks.scripts.search_tables table1 --render   # the tables from the data
     python -m benchmarks.scripts.search_tables table1 --render --write   # ... into docs/results.md
@@ -20,6 +20,8 @@ TTD differences against the best rule (positive: better) and the pooled ones.
 The hold-out grid (``holdout``) was fixed before the distillation runs: robot counts
 between and beyond the training ones, queue lengths of 5-50, layouts of other sizes,
 the MovingAI maps in ``../shared/maps/movingai`` and LoRR's ``warehouse_large`` (TTD).
+``unseen`` holds the generalist's other unseen settings (its older table's rows outside
+the hold-out grid), so every row of that table has its best rule too.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.generalist import custom_scenario, shared_map
+from benchmarks.generalist import HOLDOUT_ROW, custom_scenario, shared_map, unseen_settings
 from benchmarks.study import replace_section
 from rtaw_marl.evaluation import evaluate
 from rtaw_marl.evaluation.best_rule import choose_best_rule
@@ -95,8 +97,20 @@ def holdout() -> dict[str, Scenario]:
     return out
 
 
+def unseen() -> dict[str, Scenario]:
+    """The generalist's unseen settings (its older table) outside the hold-out grid: the
+    bar of that table's rows is each setting's best rule, stored here or in ``holdout``."""
+    grid = holdout()
+    return {
+        key: scenario
+        for key, (scenario, _) in unseen_settings().items()
+        if HOLDOUT_ROW.get(key, key) not in grid
+    }
+
+
 PARTS: dict[str, Callable[[], dict[str, Scenario]]] = {
     "table1": table1, "table2": table2, "default": default, "holdout": holdout,
+    "unseen": unseen,
 }  # fmt: skip
 
 

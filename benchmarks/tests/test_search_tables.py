@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from benchmarks.generalist import HOLDOUT_ROW, unseen_settings
 from benchmarks.scripts import search_tables
 
 pytestmark = pytest.mark.unit
@@ -12,7 +13,16 @@ pytestmark = pytest.mark.unit
 
 def test_every_row_builds_a_setting() -> None:
     sizes = {part: len(rows()) for part, rows in search_tables.PARTS.items()}
-    assert sizes == {"table1": 24, "table2": 4, "default": 1, "holdout": 13}
+    assert sizes == {"table1": 24, "table2": 4, "default": 1, "holdout": 13, "unseen": 2}
+    # The generalist's unseen settings are each in the hold-out grid or the unseen part.
+    grid, extra = search_tables.holdout(), search_tables.unseen()
+    assert set(extra) == {
+        "selection setting: layout A, M=200, paper (trained on)",
+        "LoRR warehouse_large, M=10000",
+    }
+    for key, (scenario, _) in unseen_settings().items():
+        row = HOLDOUT_ROW.get(key, key)
+        assert (grid.get(row) or extra[row]).spec() == scenario.spec(), key
     for rows in search_tables.PARTS.values():
         for scenario in rows().values():
             scenario.spec()  # every option is valid (files are read when built)

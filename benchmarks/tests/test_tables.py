@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 
 from benchmarks import study as study_mod
+from benchmarks import tables
+from benchmarks.generalist import HOLDOUT_ROW
 from benchmarks.studies import STUDIES, TABLE1
 from benchmarks.study import StudyResult, load_result, run_study
-from benchmarks.tables import ORDER, section
+from benchmarks.tables import BEST, DATA, ORDER, TABLE2, section, stored_best, with_best
 from rtaw_marl.scenarios import SCENARIOS
 
 pytestmark = pytest.mark.unit
@@ -49,7 +51,9 @@ def test_section_has_both_tables_and_pooled_lines():
     assert means.splitlines()[0].startswith("| setting | MPDM | RBTS | lookahead | hungarian")
     assert "| RTAW | RTAW+ | hindsight share: lookahead / RTAW / RTAW+ |" in means
     assert "RTAW+ vs lookahead" in comparisons
-    assert "lookahead: " in comparisons  # the strongest rule is named
+    # No stored best rule given: no column, no pooled line (not a column of dashes).
+    assert "best rule" not in comparisons
+    assert "the best rule" not in summary
     assert "- RTAW+ vs MPDM, pooled: +12.0% [" in summary
     assert "- RTAW+ beats lookahead on 3 of 3 rows (significantly on 3;" in summary
     assert "- hindsight share, pooled (lookahead / RTAW / RTAW+): 53% / 20% / 80%" in summary
@@ -61,9 +65,47 @@ def test_section_has_both_tables_and_pooled_lines():
 def test_missing_policies_show_a_dash():
     text = section({"r": fake_ttd(["MPDM", "RBTS", "lookahead", "hungarian", "RTAW"], 2)})
     assert "| r | 1000 | 990 | 920 | 1010 | - | 970 | - | - / - / - |" in text
-    assert "| r | - | - | - | - | +3.0% [+3.0, +3.0]* | lookahead: -5.4% [-5.4, -5.4]* |" in text
+    assert "| r | - | - | - | - | +3.0% [+3.0, +3.0]* |" in text
     assert "- RTAW+ vs MPDM, pooled: -" in text
     assert "RTAW+ beats MPDM on 0 of 0 rows" in text
+
+
+def test_rows_are_compared_with_the_stored_best_rule_of_their_setting():
+    rows = {"a": fake_ttd(MEANS, 4), "b": fake_ttd(MEANS, 4)}
+    chosen = list(np.array(rows["a"]["hungarian"]))  # the same episodes as the row's
+    marked, names = with_best(rows, {"a": ("hungarian", chosen)})
+    assert names == {"a": "hungarian"}
+    assert marked["a"][BEST] == chosen
+    assert BEST not in marked["b"]
+    _, comparisons, summary = section(marked, names).split("\n\n")
+    assert "| setting | best rule (seeds 1000-1019) | RTAW+ vs MPDM" in comparisons
+    # RTAW (970) against hungarian (1010): +4.0%, not against the row's best mean (920).
+    assert "| a | hungarian | +12.0%" in comparisons
+    assert "+4.0% [+4.0, +4.0]* |" in comparisons
+    assert "| b | - |" in comparisons
+    assert "- RTAW vs the best rule, pooled: +4.0% [" in summary
+
+
+def test_a_stored_best_rule_from_other_episodes_is_an_error():
+    rows = {"a": fake_ttd(MEANS, 4)}
+    with pytest.raises(ValueError, match="a: the stored lookahead TTDs differ"):
+        with_best(rows, {"a": ("lookahead", [1.0, 2.0, 3.0, 4.0])})
+
+
+def test_stored_best_reads_the_search_tables_choices(tmp_path):
+    row = {"best_rule": {"name": "mpdm"}, "ttd": {"mpdm": [3, 4], "lookahead": [1, 2]}}
+    (tmp_path / "search_x.json").write_text(json.dumps({"rows": {"k": row}}))
+    assert stored_best("x", data=tmp_path) == {"k": ("MPDM", [3.0, 4.0])}
+
+
+def test_every_stored_table_row_has_its_best_rule():
+    """The older tables' rows all find their bar in the stored search tables."""
+    best = stored_best("table1", "table2", "holdout", "unseen")
+    for mode in ("paper", "drain"):
+        assert all(f"{mode}|{SCENARIOS[n].title}" in best for n in TABLE1)
+    assert all(SCENARIOS[n].title in best for n in TABLE2)
+    unseen = load_result(DATA / "generalist_unseen.json")
+    assert all(HOLDOUT_ROW.get(k, k) in best for k in unseen.ttd)
 
 
 def test_table1_is_every_row_at_both_robot_counts_with_its_long_policies(fake, tmp_path):
@@ -109,7 +151,7 @@ def test_navigators_run_each_execution_without_noise(tmp_path):
         assert c.policies["RTAW+"].name.endswith("_astar_m10_plus")
 
 
-def test_budget_gain_pairs_each_row_with_its_bases(fake, tmp_path):
+def test_budget_gain_pairs_each_row_with_its_bases(fake, tmp_path, monkeypatch):
     s = STUDIES["budget_gain"]
     result = run_study(s, list(range(20)), tmp_path)
     asked = {labels for _, labels, _ in fake}
@@ -122,10 +164,16 @@ def test_budget_gain_pairs_each_row_with_its_bases(fake, tmp_path):
     stored = {
         f"table1_{m}": StudyResult(seeds=list(range(20)), ttd=rows) for m in ("paper", "drain")
     }
+    best = {"best_rule": {"name": "lookahead"}, "ttd": {"lookahead": table1["lookahead"]}}
+    search = {"rows": {f"{m}|{k}": best for k in rows for m in ("paper", "drain")}}
+    (tmp_path / "search_table1.json").write_text(json.dumps(search))
+    monkeypatch.setattr(tables, "DATA", tmp_path)
     text = s.render(result, stored)
     assert text.count("| A* layout C, M=100 |") == 2  # paper and drain
     assert "- RTAW+ 3x vs 1x: +2.3% [+2.3, +2.3]* (n=480)" in text
     assert "- RTAW 3x vs 1x: +0.0%" in text
+    # 860 against lookahead's 920 (the fake "best rule" of every row).
+    assert "- RTAW+ vs MPDM: +14.0% [+14.0, +14.0]* (n=480); vs the best rule: +6.5%" in text
 
 
 def test_the_horizon_check_runs_on_selection_seeds_and_h0_is_mpdm(tmp_path):

@@ -306,10 +306,11 @@ class TrainConfig(SimGroups):
         mix: Train on several scenarios at once (a generalist): member scenarios, each
             ``NAME`` or ``NAME:m30:n5:t200:paper:s90:random`` (robots, queue slots, tasks,
             episode mode, generated layout size, task stream changed;
-            :mod:`rtaw_marl.scenarios.mix`); every collector's batch holds ``collector.envs_per_worker / len(mix)`` simulators
-            of each. Empty: the run's own scenario alone. The run's scenario still
-            picks the checkpoints (``selection.*``). Needs ``model=rtaw_plus`` with
-            ``model.fleet_summary=true`` (or ``model.critic_fleet=false``).
+            :mod:`rtaw_marl.scenarios.mix`); every collector's batch holds
+            ``collector.envs_per_worker / len(mix)`` simulators of each. Empty: the run's
+            own scenario alone. The run's scenario still picks the checkpoints
+            (``selection.*``). Needs ``model=rtaw_plus`` with ``model.fleet_summary=true``
+            (or ``model.critic_fleet=false``).
         init_actor: Start the actor from the actor of this checkpoint file or shipped
             policy name (its weights only: the critic, the optimizer and the run's
             progress start fresh), e.g. a specialist continued on a mix. Its network must
