@@ -134,17 +134,25 @@ def _load(path: Path) -> object:
 def _positions(fields: ScheduleFields) -> np.ndarray:
     """``int64 [T + 1, M, 2]`` every robot's ``(row, column)`` at every timestep."""
     codes = fields.actions
-    if fields.action_model == "MAPF":
+    heading = _headings(fields)
+    if heading is None:
         delta = np.zeros((*codes.shape, 2), dtype=np.int64)
         for letter, move in _MAPF_MOVES.items():
             delta[codes == ord(letter)] = move
-    else:
-        turn = (codes == ord("R")).astype(np.int64) - (codes == ord("C"))
-        # The heading during timestep t: the start's, turned by every action before t.
-        before = np.concatenate([np.zeros((1, codes.shape[1]), np.int64), np.cumsum(turn, 0)])
-        heading = (fields.heading[None] + before[:-1]) % 4
-        delta = _FORWARD[heading] * (codes == ord("F"))[..., None]
+    else:  # a forward move goes the way the robot faces during its timestep
+        delta = _FORWARD[heading[:-1]] * (codes == ord("F"))[..., None]
     return np.concatenate([fields.start[None], fields.start[None] + np.cumsum(delta, axis=0)])
+
+
+def _headings(fields: ScheduleFields) -> np.ndarray | None:
+    """``int64 [T + 1, M]`` every robot's heading at every timestep (``MAPF_T``: the
+    start's, turned by every action before), ``None`` for ``MAPF``."""
+    if fields.action_model == "MAPF":
+        return None
+    codes = fields.actions
+    turn = (codes == ord("R")).astype(np.int64) - (codes == ord("C"))
+    before = np.concatenate([np.zeros((1, codes.shape[1]), np.int64), np.cumsum(turn, 0)])
+    return (fields.heading[None] + before) % 4
 
 
 def _check_cells(rc: np.ndarray, layout: Layout) -> None:
@@ -282,6 +290,7 @@ def _saved(
             [reached.get(k, {}).get(len(e), end) for k, e in zip(ids, errands, strict=True)],
             dtype=np.int64,
         ),
+        headings=_headings(fields),
     )
     finished = sum(1 for k, (_, e) in fields.tasks.items() if len(e) in reached.get(k, {}))
     return SavedEpisode(schedule, finished)

@@ -32,6 +32,7 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.utils.atomic import atomic_write
+from rtaw_marl.viz.schedule_fields import HEADINGS, NO_HEADING
 from rtaw_marl.viz.schedule_file import SavedEpisode, read_schedule_data, read_schedule_file
 
 __all__ = [
@@ -48,23 +49,28 @@ _MAPF_MOVES = {"U": (1, 0), "D": (-1, 0), "R": (0, 1), "L": (0, -1), "W": (0, 0)
 
 
 def episode_output(schedule: Schedule, horizon: int | None = None) -> dict[str, Any]:
-    """An executed episode as a LoRR output object (action model ``MAPF``).
+    """An executed episode as a LoRR output object (action model ``MAPF_T`` when its
+    robots turn, else ``MAPF``).
 
     Args:
         schedule: The episode.
         horizon: Timesteps to write (default: the whole schedule); tasks delivered
             later are not finished in it.
     """
-    pos = schedule.positions if horizon is None else schedule.positions[: int(horizon) + 1]
+    end = None if horizon is None else int(horizon) + 1
+    pos = schedule.positions[:end]
     steps = pos.shape[0] - 1
     rc = pos[..., ::-1]  # (row, col)
     delta = np.diff(rc, axis=0)  # [T, M, 2]
-    letters = np.full(delta.shape[:2], "W", dtype="<U1")
-    for letter, (dr, dc) in _MAPF_MOVES.items():
-        if letter not in ("W", "T"):
-            letters[(delta[..., 0] == dr) & (delta[..., 1] == dc)] = letter
     if (np.abs(delta).sum(axis=-1) > 1).any():
         raise ConfigError("the schedule moves a robot more than one cell in a timestep")
+    if schedule.headings is None:
+        model, letters = "MAPF", _mapf_letters(delta)
+        start = [[int(r), int(c), NO_HEADING] for r, c in rc[0]]
+    else:
+        heading = np.asarray(schedule.headings)[:end]
+        model, letters = "MAPF_T", _mapf_t_letters(delta, heading)
+        start = [[int(r), int(c), HEADINGS[h]] for (r, c), h in zip(rc[0], heading[0], strict=True)]
     paths = [",".join(letters[:, r]) for r in range(pos.shape[1])]
     tasks, events, plan = [], [], [[] for _ in range(pos.shape[1])]
     order = np.argsort(schedule.task_assigned, kind="stable")
@@ -79,10 +85,10 @@ def episode_output(schedule: Schedule, horizon: int | None = None) -> dict[str, 
     events.sort()
     finished = sum(1 for e in events if e[3] == 2)
     return {
-        "actionModel": "MAPF",
+        "actionModel": model,
         "version": "2024 LoRR",
         "teamSize": int(pos.shape[1]),
-        "start": [[int(r), int(c), "N/A"] for r, c in rc[0]],
+        "start": start,
         "numTaskFinished": finished,
         "makespan": steps,
         "numPlannerErrors": 0,
@@ -97,6 +103,26 @@ def episode_output(schedule: Schedule, horizon: int | None = None) -> dict[str, 
         "events": events,
         "tasks": tasks,
     }
+
+
+def _mapf_letters(delta: np.ndarray) -> np.ndarray:
+    """``MAPF`` letters ``[T, M]`` of the moves ``delta [T, M, 2]`` (row, column)."""
+    letters = np.full(delta.shape[:2], "W", dtype="<U1")
+    for letter, (dr, dc) in _MAPF_MOVES.items():
+        if letter not in ("W", "T"):
+            letters[(delta[..., 0] == dr) & (delta[..., 1] == dc)] = letter
+    return letters
+
+
+def _mapf_t_letters(delta: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    """``MAPF_T`` letters ``[T, M]``: ``F`` where a robot moved, ``R`` / ``C`` where its
+    heading ``[T + 1, M]`` turned a quarter clockwise / counter-clockwise, else ``W``."""
+    turn = (heading[1:] - heading[:-1]) % 4
+    letters = np.full(delta.shape[:2], "W", dtype="<U1")
+    letters[turn == 1] = "R"
+    letters[turn == 3] = "C"
+    letters[np.abs(delta).sum(axis=-1) == 1] = "F"
+    return letters
 
 
 def write_episode(schedule: Schedule, path: str | Path, horizon: int | None = None) -> Path:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["bfs_compact", "compact_graph", "pibt_step"]
+__all__ = ["bfs_compact", "compact_graph", "pibt_plan", "pibt_step"]
 
 
 def compact_graph(obstacles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -135,6 +135,29 @@ def _pibt(
 
 
 @njit(cache=True, nogil=True)
+def pibt_plan(
+    pos: np.ndarray,
+    order: np.ndarray,
+    goal_field: np.ndarray,
+    fields: np.ndarray,
+    nbr: np.ndarray,
+    tie: np.ndarray,
+    occ_now: np.ndarray,
+    occ_next: np.ndarray,
+    nxt: np.ndarray,
+) -> None:
+    """Plan one timestep: ``nxt`` gets the next cell of every robot whose ``nxt`` is
+    ``-1`` on entry (the others are already planned, their cells marked in
+    ``occ_next``; they are never pushed). Arguments as :func:`pibt_step`."""
+    frames = np.empty((pos.shape[0] + 1, 4), np.int64)
+    cands = np.empty((pos.shape[0] + 1, 5), np.int64)
+    keys = np.empty(5)
+    for i in order:
+        if nxt[i] < 0:
+            _pibt(i, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frames, cands, keys)
+
+
+@njit(cache=True, nogil=True)
 def pibt_step(
     pos: np.ndarray,
     order: np.ndarray,
@@ -161,12 +184,7 @@ def pibt_step(
         nxt: ``int64 [M]`` scratch.
     """
     nxt[:] = -1
-    frames = np.empty((pos.shape[0] + 1, 4), np.int64)
-    cands = np.empty((pos.shape[0] + 1, 5), np.int64)
-    keys = np.empty(5)
-    for i in order:
-        if nxt[i] < 0:
-            _pibt(i, pos, nxt, occ_now, occ_next, goal_field, fields, nbr, tie, frames, cands, keys)
+    pibt_plan(pos, order, goal_field, fields, nbr, tie, occ_now, occ_next, nxt)
     for i in range(pos.shape[0]):
         occ_now[pos[i]] = -1
     for i in range(pos.shape[0]):

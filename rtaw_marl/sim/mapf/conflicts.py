@@ -18,6 +18,9 @@ rule from the raw positions so that a planner bug cannot hide itself. Time is di
 7. A robot serves one task at a time: in order of assignment, each of its tasks is
    assigned no earlier than the delivery of its previous task.
 8. Optionally, exactly ``expected_tasks`` tasks were served.
+9. With headings (LoRR's action model): each is 0-3 (east, south, west, north); a robot
+   that moves moves the way it faces and keeps its heading, and one that stays turns a
+   quarter at most.
 
 All checks are vectorised over the whole ``[T + 1, M]`` array, so a schedule of
 thousands of steps and a hundred robots is validated in milliseconds.
@@ -179,6 +182,32 @@ def _check_tasks(schedule: Schedule, pos: np.ndarray, report: _Report) -> None:
     )
 
 
+#: The cell change ``(dx, dy)`` of a forward move facing east, south, west, north.
+_FORWARD = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]], dtype=np.int64)
+
+
+def _check_headings(heading: np.ndarray, pos: np.ndarray, report: _Report) -> None:
+    """Rule 9 (``heading int [T + 1, M]``; ``pos`` already passed rule 3)."""
+    if heading.shape != pos.shape[:2]:
+        report.note(f"headings have shape {heading.shape}, positions {pos.shape[:2]}")
+        return
+    t, m = np.nonzero((heading < 0) | (heading > 3))
+    report.add("robot {} at t={} has heading {} (not 0-3)", (m, t, heading[t, m]))
+    if len(t):
+        return
+    step = pos[1:] - pos[:-1]  # [T, M, 2]
+    moved = step.any(axis=-1)
+    facing = _FORWARD[heading[:-1]]
+    t, m = np.nonzero(moved & ((step != facing).any(axis=-1) | (heading[1:] != heading[:-1])))
+    report.add(
+        "robot {} moves from t={} to t={} by (dx={}, dy={}) facing heading {} (to {})",
+        (m, t, t + 1, step[t, m], heading[t, m], heading[t + 1, m]),
+    )
+    turn = (heading[1:] - heading[:-1]) % 4
+    t, m = np.nonzero(~moved & (turn == 2))
+    report.add("robot {} turns a half turn from t={} to t={}", (m, t, t + 1))
+
+
 def _collect(layout: Layout, schedule: Schedule, expected_tasks: int | None, limit: int) -> _Report:
     """Run every rule, keeping at most ``limit`` messages and the total count."""
     report = _Report(limit)
@@ -189,6 +218,8 @@ def _collect(layout: Layout, schedule: Schedule, expected_tasks: int | None, lim
     pos = np.asarray(schedule.positions, dtype=np.int64)
     if pos.shape[1] > 0:
         _check_motion(layout, pos, report)
+        if schedule.headings is not None and not report.total:
+            _check_headings(np.asarray(schedule.headings, dtype=np.int64), pos, report)
     _check_tasks(schedule, pos, report)
     served = len(schedule.tasks)
     if expected_tasks is not None and served != expected_tasks:

@@ -40,6 +40,7 @@ from rtaw_marl.sim.distances import DistanceModel, GridDistance
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
+from rtaw_marl.sim.mapf._turns import FORWARD, WAIT, turn_step
 from rtaw_marl.sim.mapf.schedule import Schedule
 
 __all__ = ["PIBTExecutor"]
@@ -114,17 +115,26 @@ class PIBTExecutor(Executor):
             rotation), which breaks the standoffs fixed priorities cannot.
         record: Keep every robot's cell at every timestep (for :meth:`schedule` and the
             conflict checker): ``4 M`` bytes per timestep.
+        turns: LoRR's action model (:mod:`~rtaw_marl.sim.mapf._turns`): robots start
+            facing east, move forward only, and a quarter turn takes a timestep.
+            ``False``: they move to any neighbouring cell without turning.
     """
 
     name = "pibt"
 
-    def __init__(self, stall_limit: int = 10_000, patience: int = 16, record: bool = True) -> None:
+    def __init__(
+        self, stall_limit: int = 10_000, patience: int = 16, record: bool = True,
+        turns: bool = False,
+    ) -> None:  # fmt: skip
         for key, value in (("stall_limit", stall_limit), ("patience", patience)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"navigator.{key} must be a positive integer, got {value!r}")
+        if not isinstance(turns, bool):
+            raise ConfigError(f"navigator.turns must be true or false, got {turns!r}")
         self.stall_limit = stall_limit
         self.patience = patience
         self.record = bool(record)
+        self.turns = turns
         self._bound = False
 
     @property
@@ -173,6 +183,10 @@ class PIBTExecutor(Executor):
         self.occ_now[self.pos] = np.arange(m)
         self.occ_next = np.full(len(self.cells), -1, dtype=np.int64)
         self.nxt = np.empty(m, dtype=np.int64)
+        self.heading = np.zeros(m, dtype=np.int64)  # LoRR's robots start facing east
+        self.target = np.full(m, -1, dtype=np.int64)  # committed next cells (turns)
+        self.action = np.full(m, WAIT, dtype=np.int64)
+        self.turn_actions = 0
         self.free = [int(r) for r in np.flatnonzero(records.robot_free_at <= 0)]
         heapq.heapify(self.free)
         self.waiting = sorted(
@@ -182,6 +196,7 @@ class PIBTExecutor(Executor):
         self.pickup_at = np.full(n, -1, dtype=np.int64)
         self.delivered_at = np.full(n, -1, dtype=np.int64)
         self.trace: list[np.ndarray] = [self.pos.astype(np.int32)] if self.record else []
+        self.heading_trace: list[np.ndarray] = [self.heading.astype(np.int8)]
         self.max_stall = 0
         self._done = False
 
@@ -312,13 +327,23 @@ class PIBTExecutor(Executor):
         first = np.concatenate([np.flatnonzero(busy), np.flatnonzero(~busy)])
         order = first[np.argsort(-prio[first], kind="stable")]
         tie = self.rng.random((m, 5))
-        pibt_step(
-            self.pos, order, self.goal_field, self.fields.store, self.nbr, tie, self.occ_now,
-            self.occ_next, self.nxt,
-        )  # fmt: skip
+        if self.turns:
+            turn_step(
+                self.pos, self.heading, self.target, order, self.goal_field, self.fields.store,
+                self.nbr, tie, self.occ_now, self.occ_next, self.nxt, self.action,
+            )  # fmt: skip
+            turned = (self.action != FORWARD) & (self.action != WAIT)
+            self.turn_actions += int(np.count_nonzero(turned))
+        else:
+            pibt_step(
+                self.pos, order, self.goal_field, self.fields.store, self.nbr, tie,
+                self.occ_now, self.occ_next, self.nxt,
+            )  # fmt: skip
         self.t += 1
         if self.record:
             self.trace.append(self.pos.astype(np.int32))
+            if self.turns:
+                self.heading_trace.append(self.heading.astype(np.int8))
         self.since[busy] += 1
         self._progress(busy)
         self.max_stall = max(self.max_stall, int(self.since.max(initial=0)))
@@ -344,16 +369,23 @@ class PIBTExecutor(Executor):
         if not self.record:
             raise ConfigError("navigator.record=false: this pibt episode kept no positions")
         served = np.flatnonzero(self.delivered_at >= 0)
+        headings = np.stack(self.heading_trace).astype(np.int64) if self.turns else None
         return Schedule.of_tasks(
-            self.cells[np.stack(self.trace)], self.rec, served, self.pickup_at, self.delivered_at
-        )
+            self.cells[np.stack(self.trace)], self.rec, served, self.pickup_at,
+            self.delivered_at, headings,
+        )  # fmt: skip
 
     def stats(self) -> dict[str, float]:
-        """``timesteps``, ``field_searches`` (BFS fields computed) and ``max_stall`` (the
-        most timesteps a robot waited for its goal to change)."""
-        return {
+        """``timesteps``, ``field_searches`` (BFS fields computed), ``max_stall`` (the
+        most timesteps a robot waited for its goal to change), ``rotations`` (timesteps
+        with a priority rotation) and, with ``turns``, ``turn_actions`` (quarter turns
+        taken, all robots)."""
+        out = {
             "timesteps": float(self.t),
             "field_searches": float(self.fields.searches),
             "max_stall": float(self.max_stall),
             "rotations": float(self.rotations),
         }
+        if self.turns:
+            out["turn_actions"] = float(self.turn_actions)
+        return out

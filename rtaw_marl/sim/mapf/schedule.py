@@ -32,6 +32,9 @@ class Schedule:
         task_assigned: ``int64 [K]`` decision time at which the robot got the task.
         task_pickup: ``int64 [K]`` time the robot reached the origin (the pickup).
         task_delivered: ``int64 [K]`` time the robot reached the destination.
+        headings: ``int64 [T + 1, M]`` each robot's heading at each time (LoRR's 0 east,
+            1 south, 2 west, 3 north) when robots turn (``navigator.turns``); ``None``
+            when they move in any direction without turning.
     """
 
     positions: np.ndarray
@@ -41,15 +44,17 @@ class Schedule:
     task_assigned: np.ndarray
     task_pickup: np.ndarray
     task_delivered: np.ndarray
+    headings: np.ndarray | None = None
 
     @classmethod
     def of_tasks(
         cls, positions: np.ndarray, records: Any, served: np.ndarray,
-        pickup: np.ndarray, delivered: np.ndarray,
+        pickup: np.ndarray, delivered: np.ndarray, headings: np.ndarray | None = None,
     ) -> Schedule:  # fmt: skip
         """A schedule of the tasks ``served int [K]`` of an episode's records (an
         :class:`~rtaw_marl.sim.execution.EpisodeRecords`, which imports this module), with
-        the executor's ``pickup`` and ``delivered`` times of every task (``int [T]``)."""
+        the executor's ``pickup`` and ``delivered`` times of every task (``int [T]``) and
+        the robots' ``headings`` if they turn."""
         return cls(
             positions=positions,
             tasks=records.tasks[served].copy(),
@@ -58,6 +63,7 @@ class Schedule:
             task_assigned=records.task_assigned[served].astype(np.int64),
             task_pickup=np.asarray(pickup)[served].astype(np.int64),
             task_delivered=np.asarray(delivered)[served].astype(np.int64),
+            headings=headings,
         )
 
     @property

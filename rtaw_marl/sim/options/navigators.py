@@ -149,6 +149,10 @@ class PIBTConfig(NavigatorOption):
         cache_mb: Memory of the distance fields kept (LRU), shared by the policy's
             queries and the robots' goals: lifelong fleets revisit cells (a robot
             decides at the delivery cell whose field it followed).
+        turns: LoRR's action model: robots have headings (all start facing east), move
+            forward only, and a quarter turn takes a timestep; a forward move into a
+            cell whose robot does not move forward too is cancelled. ``false``: robots
+            move to any neighbouring cell without turning.
     """
 
     name: str = "pibt"
@@ -159,6 +163,7 @@ class PIBTConfig(NavigatorOption):
     patience: int = 16
     record: bool = True
     cache_mb: float = 1024.0
+    turns: bool = False
 
     def __post_init__(self) -> None:
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
@@ -171,8 +176,9 @@ class PIBTConfig(NavigatorOption):
 
     def executor(self) -> Executor:
         return PIBTExecutor(
-            stall_limit=self.stall_limit, patience=self.patience, record=self.record
-        )
+            stall_limit=self.stall_limit, patience=self.patience, record=self.record,
+            turns=self.turns,
+        )  # fmt: skip
 
 
 def _check_positive(key: str, value: object, what: str, kind: type) -> None:
