@@ -10,7 +10,9 @@ does the same, in the same three stages:
    need turns first): its cell is reserved before anyone else plans.
 2. **PIBT** (:func:`~rtaw_marl.sim.mapf._pibt.pibt_plan`) for the uncommitted robots,
    in priority order; a committed robot is never pushed, and no robot enters the cell
-   of one committed to its own (a swap).
+   of one committed to its own (a swap). Among cells equally near its goal a robot
+   prefers the one it faces (no turn), as the kit's ``causalPIBT``: random tie-breaks
+   alone would turn it back and forth on every staircase path.
 3. **Actions.** A robot facing its next cell moves forward; otherwise it turns toward
    it (clockwise for a half turn, as the kit). A forward move into a cell whose robot
    does not itself move forward is cancelled (``moveCheck``): the robot waits, and so
@@ -34,6 +36,10 @@ FORWARD, TURN_CW, TURN_CCW, WAIT = 0, 1, 2, 3
 #: LoRR's heading (0 east, 1 south, 2 west, 3 north) of each of ``nbr``'s four columns
 #: (``+x``, ``-x``, ``+y``, ``-y``: rows grow southwards).
 _HEADING_OF = np.array([0, 2, 1, 3], dtype=np.int64)
+#: The column of ``nbr`` (and of the tie-breaks) in front of each heading: the inverse.
+_AHEAD = np.array([0, 2, 1, 3], dtype=np.int64)
+#: The tie-break of the cell a robot faces: below every other (they are in ``[0, 1)``).
+_PREFER_AHEAD = -0.5
 
 
 @njit(cache=True, nogil=True)
@@ -111,7 +117,8 @@ def turn_step(
         goal_field: ``int64 [M]`` the row of ``fields`` of each robot's goal (``-1``).
         fields: ``int [F, C]`` BFS distance fields.
         nbr: ``int32 [C, 4]`` neighbours.
-        tie: ``float64 [M, 5]`` tie-breaks in ``[0, 1)`` per candidate.
+        tie: ``float64 [M, 5]`` tie-breaks in ``[0, 1)`` per candidate; the faced
+            cell's is overwritten (it wins ties).
         occ_now: ``int64 [C]`` the robot in each cell (``-1``), kept current in place.
         occ_next: ``int64 [C]`` scratch, all ``-1`` on entry and exit.
         nxt: ``int64 [M]`` scratch.
@@ -120,6 +127,7 @@ def turn_step(
     m = pos.shape[0]
     nxt[:] = -1
     for i in range(m):
+        tie[i, _AHEAD[heading[i]]] = _PREFER_AHEAD
         if target[i] >= 0:
             nxt[i] = target[i]
             occ_next[target[i]] = i

@@ -28,7 +28,7 @@ pytestmark = pytest.mark.unit
 
 def play(
     layout: Layout, starts: list[tuple[int, int]], tasks: list[tuple[int, int, int, int]],
-    queue_len: int = 1,
+    queue_len: int = 1, seed: int = 0,
 ) -> WarehouseSim:  # fmt: skip
     """Serve ``tasks`` first queued first with turning robots; check the schedule."""
     config = SimConfig(
@@ -38,7 +38,7 @@ def play(
     option = navigator_option({"name": "pibt", "turns": True})
     sim = WarehouseSim(config, layout, option.distance_model(layout), FixedTasks(tasks),
                        executor=option.executor())  # fmt: skip
-    sim.reset(0)
+    sim.reset(seed)
     while not sim.done:
         sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
     check_schedule(layout, sim.schedule(), expected_tasks=len(tasks))
@@ -57,6 +57,16 @@ def test_a_lone_robot_pays_one_timestep_per_quarter_turn(origin, turns) -> None:
     assert schedule.task_ttd.tolist() == [origin[0] + origin[1] + turns]
     assert schedule.headings[0].tolist() == [0]
     assert sim.executor.stats()["turn_actions"] >= turns
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_on_a_staircase_a_robot_goes_straight_then_turns_once(seed: int) -> None:
+    """From (0, 0) facing east to (3, 3) on an open grid, east and south are equally
+    near at every step: the robot keeps going the way it faces (the kit's tie-break), so
+    the walk costs the distance and a single turn, whatever the random tie-breaks."""
+    sim = play(open_grid(5, 5), [(0, 0)], [(3, 3, 3, 3)], seed=seed)
+    assert sim.schedule().task_ttd.tolist() == [6 + 1]
+    assert sim.executor.stats()["turn_actions"] == 1
 
 
 def test_a_half_turn_takes_two_timesteps() -> None:
