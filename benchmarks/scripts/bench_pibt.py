@@ -4,6 +4,7 @@ Usage::
 
     python -m benchmarks.scripts.bench_pibt                       # M = 100 .. 10,000, MPDM
     python -m benchmarks.scripts.bench_pibt --robots 1000 --policy lookahead
+    python -m benchmarks.scripts.bench_pibt --robots 1000 10000 --turns   # LoRR's action model
 
 LoRR's ``warehouse_large`` problem (``../shared/maps/lorr/warehouse_large_5000.json``;
 the first ``M`` start cells of its agent file, random distinct cells beyond 5,000),
@@ -34,12 +35,15 @@ PROBLEM = (
 BLOCK = 50
 
 
-def measure(m: int, policy: str, horizon: int, warmup: int) -> dict[str, float]:
-    """Start-up seconds and steady ms per timestep of one MPDM (or ``policy``) episode."""
+def measure(
+    m: int, policy: str, horizon: int, warmup: int, turns: bool = False
+) -> dict[str, float]:
+    """Start-up seconds and steady ms per timestep of one MPDM (or ``policy``) episode
+    (robots turning as LoRR's with ``turns``)."""
     start = time.perf_counter()
     scenario = lorr_scenario(
         PROBLEM, num_robots=m, horizon=horizon, starts="file" if m <= 5000 else "random",
-        navigator={"name": "pibt", "record": False},
+        navigator={"name": "pibt", "record": False, "turns": turns},
     )  # fmt: skip
     sim = build_sim(scenario.spec())
     rule = make_baseline(policy)
@@ -71,12 +75,16 @@ def main() -> None:
     parser.add_argument("--policy", default="mpdm")
     parser.add_argument("--horizon", type=int, default=600)
     parser.add_argument("--warmup", type=int, default=100)
+    parser.add_argument("--turns", action="store_true", help="LoRR's action model")
     args = parser.parse_args()
-    print(f"policy {args.policy}, timesteps {args.warmup}-{args.horizon} in blocks of {BLOCK}")
+    model = "turns" if args.turns else "no turns"
+    print(
+        f"policy {args.policy}, {model}, timesteps {args.warmup}-{args.horizon} in blocks of {BLOCK}"
+    )
     print("| M | start s | ms / timestep (median) | slowest block | tasks finished | total s |")
     print("|---:|---:|---:|---:|---:|---:|")
     for m in args.robots:
-        r = measure(m, args.policy, args.horizon, args.warmup)
+        r = measure(m, args.policy, args.horizon, args.warmup, args.turns)
         print(f"| {m:,} | {r['start_s']:.1f} | {r['ms']:.1f} | {r['worst_ms']:.1f} | "
               f"{r['finished']:,.0f} | {r['total_s']:.0f} |", flush=True)  # fmt: skip
 
