@@ -167,7 +167,10 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | None]:
     for option, given in sources.items():
         if option in names and not given:
             raise ConfigError(f"policy={option} needs {option}=... (one value or a list)")
-    valid = [LORR_DEFAULT, *(b for b in BASELINES if b not in _NO_OUTSIDE), *sources]
+    # lorr_default is the kit's own C++ scheduler here (the rule of that name mirrors it
+    # in the own simulator).
+    rules = (b for b in BASELINES if b not in _NO_OUTSIDE and b != LORR_DEFAULT)
+    valid = [LORR_DEFAULT, *rules, *sources]
     common = {
         "problem": problem,
         "timesteps": int(cfg.timesteps),

@@ -46,7 +46,7 @@ __all__ = ["RULE_NEEDS", "RuleInput", "acting_row", "free_times"]
 #: which equal rows are interchangeable (RBTS), not for a whole-fleet assignment.
 RULE_NEEDS = frozenset(
     ("distance_model", "noise_mean", "own_distances", "distances", "robot", "own_row",
-     "robot_xy", "free_in", "queue_rows")
+     "robot_xy", "free_in", "queue_rows", "queue_length")
 )  # fmt: skip
 
 
@@ -102,6 +102,8 @@ class RuleInput:
         free_in: ``float64 [M]`` time until each robot is free, 0 for robots idle now,
             as the observation holds it (:func:`free_times`).
         queue_rows: ``int64 [N, 4]`` ``(ox, oy, dx, dy)`` per slot, zeros when empty.
+        queue_length: ``float64 [N]`` each task's origin -> destination length (empty
+            slots: meaningless).
     """
 
     mask: np.ndarray
@@ -114,6 +116,7 @@ class RuleInput:
     robot_xy: np.ndarray | None = None
     free_in: np.ndarray | None = None
     queue_rows: np.ndarray | None = None
+    queue_length: np.ndarray | None = None
 
     @classmethod
     def of_sim(
@@ -146,6 +149,7 @@ class RuleInput:
             distances=sim.distance_matrix() if "distances" in needs else None,
             robot=robot, robot_xy=sim.robot_xy if "robot_xy" in needs else None,
             free_in=free_in, queue_rows=sim.queue_rows if "queue_rows" in needs else None,
+            queue_length=sim.queue_length if "queue_length" in needs else None,
         )  # fmt: skip
 
     @classmethod
@@ -193,16 +197,17 @@ class RuleInput:
             )
         mask = np.asarray(observation["action_mask"], dtype=bool)
         # The distances are measured from the observed cells to the observed origins.
-        tasks_needed = bool(needs & {"own_distances", "queue_rows", "distances"})
+        tasks_needed = bool(needs & {"own_distances", "queue_rows", "distances", "queue_length"})
         robots_needed = bool(needs & {"robot", "own_row", "robot_xy", "free_in", "distances"})
         agent_needed = bool(needs & {"robot", "own_row"})
         keys = [key for key, wanted in (("robots", robots_needed), ("tasks", tasks_needed),
                                         ("agent", agent_needed)) if wanted]  # fmt: skip
         features = read_features(observation, keys, reader) if keys else {}
-        own = rows = robot = robot_xy = free_in = dist = None
+        own = rows = robot = robot_xy = free_in = dist = length = None
         if tasks_needed:
             tasks = features["tasks"].astype(np.float64) * scale
             own = tasks[:, 4] if "own_distances" in needs else None
+            length = tasks[:, 5] if "queue_length" in needs else None
             rows = np.rint(tasks[:, :4]).astype(np.int64)
         if robots_needed:
             table = features["robots"]
@@ -222,6 +227,7 @@ class RuleInput:
             mask, float(scale), distance_model, noise_mean, own_distances=own, distances=dist,
             robot=robot, robot_xy=robot_xy if "robot_xy" in needs else None,
             free_in=free_in, queue_rows=rows if "queue_rows" in needs else None,
+            queue_length=length,
         )  # fmt: skip
 
 

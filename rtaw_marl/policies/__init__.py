@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtaw_marl.errors import missing_extra, unknown_name
 from rtaw_marl.policies.base import Policy, simulator_of
-from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, RandomPolicy
+from rtaw_marl.policies.baselines import MPDM, RBTS, BaselinePolicy, KitGreedy, RandomPolicy
 from rtaw_marl.policies.batch import BatchAssignment
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.policies.hindsight import Hindsight
@@ -32,6 +32,7 @@ __all__ = [
     "BatchAssignment",
     "Hindsight",
     "Hungarian",
+    "KitGreedy",
     "Lookahead",
     "NetworkPolicy",
     "Policy",
@@ -48,6 +49,7 @@ BASELINES: dict[str, _Factory] = {
     MPDM.name: lambda _: MPDM(),
     RBTS.name: lambda _: RBTS(),
     RandomPolicy.name: lambda _: RandomPolicy(),
+    KitGreedy.name: lambda _: KitGreedy(),
     Lookahead.name: lambda p: Lookahead(
         horizon=p.lookahead_horizon, candidates=p.lookahead_candidates
     ),
@@ -73,8 +75,8 @@ def make_baseline(
     observations, ``act(obs)``, choosing what ``act_sim`` would.
 
     Args:
-        name: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``, ``batch``
-            or ``hindsight``.
+        name: ``mpdm``, ``rbts``, ``lorr_default``, ``random``, ``lookahead``,
+            ``hungarian``, ``batch`` or ``hindsight``.
         env: A PettingZoo or Gymnasium warehouse env (wrapped or not) or its
             ``WarehouseSim``: the rule takes its distance model, scale and completion noise's
             mean (:meth:`BaselinePolicy.bind`); ``None``: a rule for ``act_sim``.

@@ -1,4 +1,4 @@
-"""Classical allocation rules: MPDM, RBTS and uniform random.
+"""Classical allocation rules: MPDM, RBTS, LoRR's start-kit greedy and uniform random.
 
 Each rule is a :class:`~rtaw_marl.policies.base.Policy` written once, as
 :meth:`BaselinePolicy.decide` on a :class:`~rtaw_marl.decision.rule_input.RuleInput`
@@ -21,6 +21,11 @@ MPDM faces two equally close pickups and picks at random.
     the closest *other* robot to its origin minus the free robot's distance; choose the
     largest regret. Other robots count at the cell where they will next be free. With a
     single robot there is no other robot and RBTS reduces to MPDM.
+``lorr_default``
+    The League of Robot Runners' start-kit scheduler (``default_planner/scheduler.cpp``):
+    the task of least pickup-plus-delivery travel (the free robot's distance to the
+    origin plus the task's length), never reassigned. In ``rtaw-lorr`` the same name
+    runs the kit's own C++ scheduler; this is its rule for the own simulator.
 ``random``
     Uniform over the valid (non-empty) slots.
 """
@@ -40,7 +45,7 @@ from rtaw_marl.policies.base import simulator_of
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.distances import DistanceModel
 
-__all__ = ["MPDM", "RBTS", "BaselinePolicy", "RandomPolicy", "free_times"]
+__all__ = ["MPDM", "RBTS", "BaselinePolicy", "KitGreedy", "RandomPolicy", "free_times"]
 
 _TIE_RTOL = 1e-6
 
@@ -183,6 +188,18 @@ class RBTS(BaselinePolicy):
         others = dist.copy()
         others[me] = np.inf
         return self._pick(others.min(axis=0) - dist[me], decision.mask)
+
+
+class KitGreedy(BaselinePolicy):
+    """LoRR's start-kit scheduler: least pickup-plus-delivery travel for the free robot."""
+
+    name = "lorr_default"
+    needs = frozenset(("own_distances", "queue_length"))
+
+    def decide(self, decision: RuleInput) -> int:
+        assert decision.own_distances is not None
+        assert decision.queue_length is not None
+        return self._nearest(decision.own_distances + decision.queue_length, decision.mask)
 
 
 class RandomPolicy(BaselinePolicy):

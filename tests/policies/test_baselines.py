@@ -87,6 +87,27 @@ def test_mpdm_picks_nearest(setting: str) -> None:
         sim.step(slot)
 
 
+@pytest.mark.parametrize("setting", sorted(SETTINGS))
+def test_lorr_default_picks_least_pickup_plus_delivery_travel(setting: str) -> None:
+    """At every decision the kit's greedy takes a task of least distance to its origin
+    plus its length, and that is not always MPDM's nearest origin."""
+    nav_name, layout = SETTINGS[setting]
+    sim = random_sim(nav_name, layout)
+    sim.reset(0)
+    policy = make_baseline("lorr_default")
+    differs = 0
+    while not sim.done:
+        slot = policy.act_sim(sim)
+        valid = np.flatnonzero(sim.queue_mask)
+        travel = sim.robot_distances()[valid] + sim.queue_length[valid]
+        assert slot in valid
+        assert travel[valid.tolist().index(slot)] == pytest.approx(travel.min())
+        d = sim.robot_distances()[valid]
+        differs += d[valid.tolist().index(slot)] > d.min() + 1e-9
+        sim.step(slot)
+    assert differs > 0
+
+
 def test_mpdm_ties_random_but_reproducible() -> None:
     """In the two-task setting both pickups are equally close: MPDM picks each of them over 500
     decisions, the same way for the same reset seed and differently for another seed."""
@@ -279,7 +300,7 @@ def _run_env(
 
 @pytest.mark.parametrize("num_robots", [1, 5])
 @pytest.mark.parametrize("setting", sorted(SETTINGS))
-@pytest.mark.parametrize("name", ["mpdm", "rbts", "random"])
+@pytest.mark.parametrize("name", ["mpdm", "rbts", "lorr_default", "random"])
 def test_observation_path_matches_simulator(name: str, setting: str, num_robots: int) -> None:
     """policy.act on env observations chooses exactly the actions of act_sim on a bare
     simulator with the same seed and config, and gives the same total TTD."""

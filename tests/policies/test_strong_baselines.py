@@ -197,6 +197,7 @@ def test_registry_and_parameters() -> None:
     assert set(BASELINES) == {
         "mpdm",
         "rbts",
+        "lorr_default",
         "random",
         "lookahead",
         "hungarian",
