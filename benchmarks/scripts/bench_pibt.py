@@ -5,6 +5,7 @@ Usage::
     python -m benchmarks.scripts.bench_pibt                       # M = 100 .. 10,000, MPDM
     python -m benchmarks.scripts.bench_pibt --robots 1000 --policy lookahead
     python -m benchmarks.scripts.bench_pibt --robots 1000 10000 --turns   # LoRR's action model
+    python -m benchmarks.scripts.bench_pibt --robots 10000 --turns --guidance 1   # and guide paths
 
 LoRR's ``warehouse_large`` problem (``../shared/maps/lorr/warehouse_large_5000.json``;
 the first ``M`` start cells of its agent file, random distinct cells beyond 5,000),
@@ -36,14 +37,14 @@ BLOCK = 50
 
 
 def measure(
-    m: int, policy: str, horizon: int, warmup: int, turns: bool = False
+    m: int, policy: str, horizon: int, warmup: int, turns: bool = False, guidance: float = 0.0
 ) -> dict[str, float]:
     """Start-up seconds and steady ms per timestep of one MPDM (or ``policy``) episode
-    (robots turning as LoRR's with ``turns``)."""
+    (robots turning as LoRR's with ``turns``; guide paths with ``guidance > 0``)."""
     start = time.perf_counter()
     scenario = lorr_scenario(
         PROBLEM, num_robots=m, horizon=horizon, starts="file" if m <= 5000 else "random",
-        navigator={"name": "pibt", "record": False, "turns": turns},
+        navigator={"name": "pibt", "record": False, "turns": turns, "guidance": guidance},
     )  # fmt: skip
     sim = build_sim(scenario.spec())
     rule = make_baseline(policy)
@@ -66,6 +67,7 @@ def measure(
         "worst_ms": float(np.max(blocks)),
         "finished": float(sim.metrics().tasks_finished),
         "total_s": time.perf_counter() - start,
+        "max_stall": float(sim.executor.stats()["max_stall"]),
     }
 
 
@@ -76,15 +78,16 @@ def main() -> None:
     parser.add_argument("--horizon", type=int, default=600)
     parser.add_argument("--warmup", type=int, default=100)
     parser.add_argument("--turns", action="store_true", help="LoRR's action model")
+    parser.add_argument("--guidance", type=float, default=0.0, help="contraflow weight")
     args = parser.parse_args()
-    model = "turns" if args.turns else "no turns"
+    model = ("turns" if args.turns else "no turns") + f", guidance {args.guidance:g}"
     print(
         f"policy {args.policy}, {model}, timesteps {args.warmup}-{args.horizon} in blocks of {BLOCK}"
     )
     print("| M | start s | ms / timestep (median) | slowest block | tasks finished | total s |")
     print("|---:|---:|---:|---:|---:|---:|")
     for m in args.robots:
-        r = measure(m, args.policy, args.horizon, args.warmup, args.turns)
+        r = measure(m, args.policy, args.horizon, args.warmup, args.turns, args.guidance)
         print(f"| {m:,} | {r['start_s']:.1f} | {r['ms']:.1f} | {r['worst_ms']:.1f} | "
               f"{r['finished']:,.0f} | {r['total_s']:.0f} |", flush=True)  # fmt: skip
 

@@ -127,7 +127,8 @@ def turn_step(
     m = pos.shape[0]
     nxt[:] = -1
     for i in range(m):
-        tie[i, _AHEAD[heading[i]]] = _PREFER_AHEAD
+        ahead = _AHEAD[heading[i]]
+        tie[i, ahead] = min(tie[i, ahead], _PREFER_AHEAD)  # a guide's mark stays
         if target[i] >= 0:
             nxt[i] = target[i]
             occ_next[target[i]] = i

@@ -16,6 +16,12 @@ forever where one must back off. The TTD of a task is its pickup time minus its
 assignment time, waits included; the robot is free at the delivery time. Decisions are
 taken when a robot is free, in order of robot id within a timestep.
 
+Two options bring it to the League of Robot Runners' rules and planner:
+``navigator.turns`` gives robots LoRR's headings and quarter turns
+(:mod:`~rtaw_marl.sim.mapf._turns`), and ``navigator.guidance`` steers them along
+congestion-aware guide paths, as LoRR's default planner does
+(:mod:`~rtaw_marl.sim.mapf._guidance`): without it, opposite streams meet head-on.
+
 What is guaranteed: every timestep is free of vertex and swap conflicts (by
 construction, and checked by :func:`~rtaw_marl.sim.mapf.conflicts.check_schedule` on
 every recorded episode). What is not: PIBT reaches every goal only on graphs where
@@ -39,6 +45,7 @@ from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError
 from rtaw_marl.sim.distances import DistanceModel, GridDistance
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
+from rtaw_marl.sim.mapf._guidance import guide_advance, guide_compact, guide_plan, guide_ties
 from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
 from rtaw_marl.sim.mapf._turns import FORWARD, WAIT, turn_step
 from rtaw_marl.sim.mapf.schedule import Schedule
@@ -118,13 +125,16 @@ class PIBTExecutor(Executor):
         turns: LoRR's action model (:mod:`~rtaw_marl.sim.mapf._turns`): robots start
             facing east, move forward only, and a quarter turn takes a timestep.
             ``False``: they move to any neighbouring cell without turning.
+        guidance: Traffic-flow guidance (:mod:`~rtaw_marl.sim.mapf._guidance`): the
+            cost of one other robot's guide path using an edge the other way; ``0``:
+            none (robots follow shortest paths).
     """
 
     name = "pibt"
 
     def __init__(
         self, stall_limit: int = 10_000, patience: int = 16, record: bool = True,
-        turns: bool = False,
+        turns: bool = False, guidance: float = 0.0,
     ) -> None:  # fmt: skip
         for key, value in (("stall_limit", stall_limit), ("patience", patience)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -135,6 +145,7 @@ class PIBTExecutor(Executor):
         self.patience = patience
         self.record = bool(record)
         self.turns = turns
+        self.guidance = float(guidance)
         self._bound = False
 
     @property
@@ -187,6 +198,7 @@ class PIBTExecutor(Executor):
         self.target = np.full(m, -1, dtype=np.int64)  # committed next cells (turns)
         self.action = np.full(m, WAIT, dtype=np.int64)
         self.turn_actions = 0
+        self._guide_reset(m)
         self.free = [int(r) for r in np.flatnonzero(records.robot_free_at <= 0)]
         heapq.heapify(self.free)
         self.waiting = sorted(
@@ -327,6 +339,9 @@ class PIBTExecutor(Executor):
         first = np.concatenate([np.flatnonzero(busy), np.flatnonzero(~busy)])
         order = first[np.argsort(-prio[first], kind="stable")]
         tie = self.rng.random((m, 5))
+        if self.guidance > 0:
+            g = self.guide
+            guide_ties(self.pos, g["buf"], g["start"], g["length"], g["at"], self.nbr, tie)
         if self.turns:
             turn_step(
                 self.pos, self.heading, self.target, order, self.goal_field, self.fields.store,
@@ -353,7 +368,51 @@ class PIBTExecutor(Executor):
                 self._picked_up(robot)
             else:
                 self._delivered(robot)
+        if self.guidance > 0:
+            self._guide_update()
         return len(arrived)
+
+    def _guide_reset(self, m: int) -> None:
+        """Empty guide paths and flows (:mod:`~rtaw_marl.sim.mapf._guidance`)."""
+        c = len(self.cells)
+        self.guide = {
+            "buf": np.empty(8 * c + 64 * m, dtype=np.int64),
+            "start": np.full(m, -1, dtype=np.int64),
+            "length": np.zeros(m, dtype=np.int64),
+            "at": np.zeros(m, dtype=np.int64),
+            "flow": np.zeros((c, 4), dtype=np.int32),
+            "need": np.zeros(m, dtype=bool),
+            "cost": np.zeros(c), "parent": np.zeros(c, dtype=np.int64),
+            "stamp": np.full(c, -1, dtype=np.int64), "heap_key": np.empty(4 * c),
+            "heap_node": np.empty(4 * c, dtype=np.int64),
+        }  # fmt: skip
+        self.guide_cursor = 0
+        self.guide_epoch = 0
+        self.guide_paths = 0
+
+    def _guide_update(self) -> None:
+        """Advance every robot along its guide path; plan new ones where needed."""
+        g = self.guide
+        guide_advance(
+            self.pos, self.goal, g["buf"], g["start"], g["length"], g["at"], g["flow"],
+            self.nbr, g["need"],
+        )  # fmt: skip
+        robots = np.flatnonzero(g["need"]).astype(np.int64)
+        if not len(robots):
+            return
+        c = len(self.cells)
+        if self.guide_cursor + len(robots) * c > len(g["buf"]):
+            out = np.empty(max(len(g["buf"]), 2 * self.guide_cursor + len(robots) * c), np.int64)
+            self.guide_cursor = guide_compact(g["buf"], g["start"], g["length"], g["at"], out)
+            g["buf"] = out
+        self.guide_cursor = guide_plan(
+            robots, self.pos, self.goal, self.goal_field, self.fields.store, self.nbr,
+            g["flow"], self.guidance, g["buf"], self.guide_cursor, g["start"], g["length"],
+            g["at"], g["cost"], g["parent"], g["stamp"], self.guide_epoch, g["heap_key"],
+            g["heap_node"],
+        )  # fmt: skip
+        self.guide_epoch += len(robots)
+        self.guide_paths += len(robots)
 
     def _progress(self, busy: np.ndarray) -> None:
         """Count, per busy robot, the timesteps since it last got nearer its goal."""
@@ -388,4 +447,6 @@ class PIBTExecutor(Executor):
         }
         if self.turns:
             out["turn_actions"] = float(self.turn_actions)
+        if self.guidance > 0:
+            out["guide_paths"] = float(self.guide_paths)
         return out

@@ -153,6 +153,9 @@ class PIBTConfig(NavigatorOption):
             forward only, and a quarter turn takes a timestep; a forward move into a
             cell whose robot does not move forward too is cancelled. ``false``: robots
             move to any neighbouring cell without turning.
+        guidance: Traffic-flow guidance: each robot follows a guide path planned on
+            edge costs ``1 + guidance x`` the number of other robots' guide paths using
+            the edge the other way (contraflow); ``0``: none, shortest paths.
     """
 
     name: str = "pibt"
@@ -164,8 +167,11 @@ class PIBTConfig(NavigatorOption):
     record: bool = True
     cache_mb: float = 1024.0
     turns: bool = False
+    guidance: float = 0.0
 
     def __post_init__(self) -> None:
+        if not 0 <= float(self.guidance) < float("inf"):
+            raise ConfigError(f"navigator.guidance must be a number >= 0, got {self.guidance!r}")
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
         _check_positive("navigator.patience", self.patience, "integer", int)
         _check_positive("navigator.cache_mb", self.cache_mb, "number", float)
@@ -177,7 +183,7 @@ class PIBTConfig(NavigatorOption):
     def executor(self) -> Executor:
         return PIBTExecutor(
             stall_limit=self.stall_limit, patience=self.patience, record=self.record,
-            turns=self.turns,
+            turns=self.turns, guidance=float(self.guidance),
         )  # fmt: skip
 
 
