@@ -122,11 +122,13 @@ def test_start_kit_problem_runs_collision_free_with_the_window(kit: Path) -> Non
 
 def test_priority_rotation_breaks_the_standoffs_of_fixed_priorities(kit: Path) -> None:
     """The start kit's random map deadlocks with fixed priorities (seed 0: no goal
-    reached for 200 timesteps by t = 508) and runs to the horizon with rotation."""
+    reached for 200 timesteps by t = 508) and runs to the horizon with rotation (the
+    turn-free model without guidance, where standoffs are most frequent)."""
     from rtaw_marl.errors import PlanningError
 
     def play(patience: int) -> object:
-        nav = {"name": "pibt", "stall_limit": 200, "patience": patience, "record": False}
+        nav = {"name": "pibt", "stall_limit": 200, "patience": patience, "record": False,
+               "turns": False, "guidance": 0.0}  # fmt: skip
         sim = build_sim(lorr_scenario(kit, horizon=700, navigator=nav).spec())
         run_episode(sim, make_baseline("mpdm"), seed=0)
         return sim

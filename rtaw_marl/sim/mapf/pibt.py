@@ -113,6 +113,8 @@ class _Fields:
 
 class PIBTExecutor(Executor):
     """Lifelong PIBT on the layout's free cells (4-connected, one move per second).
+    Built by :class:`~rtaw_marl.sim.options.PIBTConfig` (``navigator=pibt``), which holds
+    the defaults.
 
     Args:
         stall_limit: Timesteps without any robot reaching a goal before the episode is
@@ -133,8 +135,7 @@ class PIBTExecutor(Executor):
     name = "pibt"
 
     def __init__(
-        self, stall_limit: int = 10_000, patience: int = 16, record: bool = True,
-        turns: bool = False, guidance: float = 0.0,
+        self, *, stall_limit: int, patience: int, record: bool, turns: bool, guidance: float,
     ) -> None:  # fmt: skip
         for key, value in (("stall_limit", stall_limit), ("patience", patience)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:

@@ -135,7 +135,9 @@ class CBSConfig(NavigatorOption):
 @dataclass(kw_only=True)
 class PIBTConfig(NavigatorOption):
     """Collision-aware for any fleet size: lifelong PIBT moves every robot one cell per
-    timestep (:mod:`rtaw_marl.sim.mapf.pibt`); the policy observes A* distances.
+    timestep (:mod:`rtaw_marl.sim.mapf.pibt`); the policy observes A* distances. By
+    default as LoRR's planner moves its robots: headings and quarter turns, traffic-flow
+    guidance (``turns=false guidance=0``: the turn-free model on shortest paths).
 
     Attributes:
         stall_limit: Timesteps without any robot reaching a goal before the episode
@@ -152,10 +154,12 @@ class PIBTConfig(NavigatorOption):
         turns: LoRR's action model: robots have headings (all start facing east), move
             forward only, and a quarter turn takes a timestep; a forward move into a
             cell whose robot does not move forward too is cancelled. ``false``: robots
-            move to any neighbouring cell without turning.
+            move to any neighbouring cell without turning (the turn-free model).
         guidance: Traffic-flow guidance: each robot follows a guide path planned on
             edge costs ``1 + guidance x`` the number of other robots' guide paths using
-            the edge the other way (contraflow); ``0``: none, shortest paths.
+            the edge the other way (contraflow); ``0``: none, shortest paths. With
+            ``turns``, the defaults are LoRR's planner: within 5% of LoRR's own counts
+            on its random map (docs/lorr.md).
     """
 
     name: str = "pibt"
@@ -166,12 +170,13 @@ class PIBTConfig(NavigatorOption):
     patience: int = 16
     record: bool = True
     cache_mb: float = 1024.0
-    turns: bool = False
-    guidance: float = 0.0
+    turns: bool = True
+    guidance: float = 1.0
 
     def __post_init__(self) -> None:
-        if not 0 <= float(self.guidance) < float("inf"):
-            raise ConfigError(f"navigator.guidance must be a number >= 0, got {self.guidance!r}")
+        g = self.guidance
+        if isinstance(g, bool) or not isinstance(g, (int, float)) or not 0 <= g < float("inf"):
+            raise ConfigError(f"navigator.guidance must be a number >= 0, got {g!r}")
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
         _check_positive("navigator.patience", self.patience, "integer", int)
         _check_positive("navigator.cache_mb", self.cache_mb, "number", float)

@@ -1,4 +1,5 @@
-"""Lifelong PIBT execution (``navigator=pibt``), fixed-horizon episodes and LoRR's
+"""Lifelong PIBT execution (``navigator=pibt``, the turn-free model without guidance:
+``test_turns.py`` and ``test_guidance.py`` test those), fixed-horizon episodes and LoRR's
 reveal window (``sim.refill=finish``)."""
 
 from __future__ import annotations
@@ -40,7 +41,9 @@ def play(
         num_robots=len(starts), num_tasks=len(tasks), queue_len=queue_len, noise_mean=0.0,
         noise_var=0.0, robot_starts=tuple(starts),
     )  # fmt: skip
-    option = navigator_option({"name": "pibt", "stall_limit": stall_limit})
+    option = navigator_option(
+        {"name": "pibt", "stall_limit": stall_limit, "turns": False, "guidance": 0.0}
+    )
     sim = WarehouseSim(config, layout, option.distance_model(layout), FixedTasks(tasks),
                        executor=option.executor())  # fmt: skip
     sim.reset(0)
@@ -133,7 +136,8 @@ def test_pibt_step_never_collides_on_random_grids(seed: int, fill: float) -> Non
 def warehouse(**sim: object) -> WarehouseSim:
     base = {"num_robots": 60, "num_tasks": 200, "queue_len": 10}
     base.update(sim)
-    return build_sim(SimSpec.of(base, {"name": "preset", "preset": "C"}, "pibt", "designated"))
+    nav = {"name": "pibt", "turns": False, "guidance": 0.0}  # the turn-free model
+    return build_sim(SimSpec.of(base, {"name": "preset", "preset": "C"}, nav, "designated"))
 
 
 def test_warehouse_episode_is_valid_and_deterministic() -> None:

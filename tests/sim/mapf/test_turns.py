@@ -35,7 +35,7 @@ def play(
         num_robots=len(starts), num_tasks=len(tasks), queue_len=queue_len, noise_mean=0.0,
         noise_var=0.0, robot_starts=tuple(starts),
     )  # fmt: skip
-    option = navigator_option({"name": "pibt", "turns": True})
+    option = navigator_option({"name": "pibt", "turns": True, "guidance": 0.0})
     sim = WarehouseSim(config, layout, option.distance_model(layout), FixedTasks(tasks),
                        executor=option.executor())  # fmt: skip
     sim.reset(seed)
@@ -157,7 +157,7 @@ def test_turn_step_never_collides_on_random_grids(seed: int, fill: float) -> Non
 
 def warehouse(turns: bool) -> WarehouseSim:
     sim = {"num_robots": 60, "num_tasks": 200, "queue_len": 10}
-    nav = {"name": "pibt", "turns": turns}
+    nav = {"name": "pibt", "turns": turns, "guidance": 0.0}
     return build_sim(SimSpec.of(sim, {"name": "preset", "preset": "C"}, nav, "designated"))
 
 
