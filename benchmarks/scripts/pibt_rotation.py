@@ -28,7 +28,9 @@ def main() -> None:
     for label, patience in (("rotation off", 10**9), ("rotation on (default)", 16)):
         outcomes = []
         for seed in range(5):
-            nav = {"name": "pibt", "stall_limit": 200, "patience": patience, "record": False}
+            # The turn-free model without guidance, where the measurement was made.
+            nav = {"name": "pibt", "stall_limit": 200, "patience": patience, "record": False,
+                   "turns": False, "guidance": 0.0}  # fmt: skip
             sim = build_sim(lorr_scenario(PROBLEM, navigator=nav).spec())
             try:
                 run_episode(sim, make_baseline("mpdm"), seed=seed)
