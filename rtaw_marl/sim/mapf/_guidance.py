@@ -134,8 +134,9 @@ def _pop(heap_key, heap_node, size) -> int:
 def guide_plan(
     robots, pos, goal, goal_field, fields, nbr, flow, weight, buf, cursor, start, length,
     at, cost, parent, stamp, epoch, heap_key, heap_node,
-) -> int:  # fmt: skip
-    """A new guide path for each of ``robots``, written into ``buf`` from ``cursor``.
+) -> tuple[int, int]:  # fmt: skip
+    """A new guide path for each of ``robots``, written into ``buf`` from ``cursor``,
+    as long as ``buf`` has room for a path of every cell.
 
     Args:
         robots: ``int64 [K]`` the robots to plan (each with a goal, off it).
@@ -144,17 +145,19 @@ def guide_plan(
         nbr: ``int32 [C, 4]`` neighbours.
         flow: ``int32 [C, 4]`` edge flows (each new path's edges are added).
         weight: Cost of one unit of contraflow on an edge (its base cost is 1).
-        buf, start, length, at: The paths; ``buf`` must have room for ``K`` paths of
-            ``C`` cells after ``cursor``.
+        buf, start, length, at: The paths.
         cost, parent, stamp: ``float64 [C]``, ``int64 [C]``, ``int64 [C]`` scratch
             (``stamp`` marks the cells seen by search number ``epoch + i``).
         epoch: The first search number (larger than any in ``stamp``).
         heap_key, heap_node: ``float64 [4 C]``, ``int64 [4 C]`` scratch.
 
     Returns:
-        The new ``cursor``.
+        The new ``cursor`` and how many of ``robots`` were planned (fewer than ``K``
+        when ``buf`` ran out of room: compact it, then plan the rest).
     """
     for i in range(robots.shape[0]):
+        if cursor + stamp.shape[0] > buf.shape[0]:
+            return cursor, i
         r = robots[i]
         mark = epoch + i
         src, dst, row = pos[r], goal[r], goal_field[r]
@@ -197,7 +200,7 @@ def guide_plan(
             flow[u, _edge(nbr, u, v)] += 1
         start[r], length[r], at[r] = cursor, n, 0
         cursor += n
-    return cursor
+    return cursor, robots.shape[0]
 
 
 @njit(cache=True, nogil=True)

@@ -373,11 +373,21 @@ class PIBTExecutor(Executor):
             self._guide_update()
         return len(arrived)
 
+    def _guide_compact(self) -> None:
+        """Keep only the cells still to walk, in a buffer sized by them (twice, and room
+        for a path of every cell): it does not grow with the episode."""
+        g, c = self.guide, len(self.cells)
+        live = int((g["length"] - g["at"])[g["start"] >= 0].sum())
+        out = np.empty(max(self._guide_capacity, 2 * live + 2 * c), np.int64)
+        self.guide_cursor = guide_compact(g["buf"], g["start"], g["length"], g["at"], out)
+        g["buf"] = out
+
     def _guide_reset(self, m: int) -> None:
         """Empty guide paths and flows (:mod:`~rtaw_marl.sim.mapf._guidance`)."""
         c = len(self.cells)
+        self._guide_capacity = 8 * c + 64 * m
         self.guide = {
-            "buf": np.empty(8 * c + 64 * m, dtype=np.int64),
+            "buf": np.empty(self._guide_capacity, dtype=np.int64),
             "start": np.full(m, -1, dtype=np.int64),
             "length": np.zeros(m, dtype=np.int64),
             "at": np.zeros(m, dtype=np.int64),
@@ -401,17 +411,17 @@ class PIBTExecutor(Executor):
         robots = np.flatnonzero(g["need"]).astype(np.int64)
         if not len(robots):
             return
-        c = len(self.cells)
-        if self.guide_cursor + len(robots) * c > len(g["buf"]):
-            out = np.empty(max(len(g["buf"]), 2 * self.guide_cursor + len(robots) * c), np.int64)
-            self.guide_cursor = guide_compact(g["buf"], g["start"], g["length"], g["at"], out)
-            g["buf"] = out
-        self.guide_cursor = guide_plan(
-            robots, self.pos, self.goal, self.goal_field, self.fields.store, self.nbr,
-            g["flow"], self.guidance, g["buf"], self.guide_cursor, g["start"], g["length"],
-            g["at"], g["cost"], g["parent"], g["stamp"], self.guide_epoch, g["heap_key"],
-            g["heap_node"],
-        )  # fmt: skip
+        done = 0
+        while done < len(robots):
+            self.guide_cursor, planned = guide_plan(
+                robots[done:], self.pos, self.goal, self.goal_field, self.fields.store,
+                self.nbr, g["flow"], self.guidance, g["buf"], self.guide_cursor, g["start"],
+                g["length"], g["at"], g["cost"], g["parent"], g["stamp"],
+                self.guide_epoch + done, g["heap_key"], g["heap_node"],
+            )  # fmt: skip
+            done += planned
+            if done < len(robots):
+                self._guide_compact()
         self.guide_epoch += len(robots)
         self.guide_paths += len(robots)
 

@@ -42,11 +42,12 @@ class Guides:
         for r in robots:
             bfs_compact(self.nbr, int(goal[r]), self.fields[r])
         robots = np.asarray(robots, dtype=np.int64)
-        self.cursor = guide_plan(
+        self.cursor, planned = guide_plan(
             robots, pos, goal, np.arange(len(pos)), self.fields, self.nbr, self.flow, weight,
             self.buf, self.cursor, self.start, self.length, self.at, *self.scratch,
             self.epoch, *self.heap,
         )  # fmt: skip
+        assert planned == len(robots)
         self.epoch += len(robots)
 
     def path(self, r: int) -> list[tuple[int, int]]:
@@ -140,3 +141,20 @@ def test_guidance_must_be_a_finite_non_negative_number(value: float) -> None:
 def test_spec_with_guidance_builds() -> None:
     spec = SimSpec.of({"num_robots": 5}, "shelves", {"name": "pibt", "guidance": 0.5}, "random")
     assert build_sim(spec).executor.guidance == 0.5
+
+
+def test_the_guide_buffer_stays_bounded_over_a_long_episode() -> None:
+    """Replanning appends paths; compaction keeps only what is left to walk, so the
+    buffer does not grow with the episode (it doubled at every compaction once)."""
+    sim = lorr_random(turns=True, guidance=1.0)
+    sim.reset(0)
+    rule = make_baseline("mpdm")
+    ex = sim.executor
+    sizes = []
+    while not sim.done:
+        sim.step(rule.act_sim(sim))
+        sizes.append(len(ex.guide["buf"]))
+    c, m = len(ex.cells), ex.num_robots
+    assert max(sizes) == 8 * c + 64 * m  # never grown on this map
+    written = ex.stats()["guide_paths"]
+    assert written > 10 * m  # the paths written would have overflowed it many times
