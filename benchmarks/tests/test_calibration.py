@@ -35,3 +35,15 @@ def test_own_count_with_turns_and_guidance_is_within_5_percent_of_the_judge(poli
     official = json.loads(DATA.read_text())["runs"][policy]["tasks_finished"]
     assert abs(own(policy, turns=True, guidance=1.0) - official) <= 0.05 * official
     assert own(policy, turns=False, guidance=0.0) > 1.3 * official  # the old model
+
+
+def test_the_rank_agreement_leaves_out_pairs_within_lorrs_spread() -> None:
+    from benchmarks.scripts.lorr_spread import resolved_tau
+
+    official = {"a": [100.0, 104.0], "b": [101.0, 103.0], "c": [80.0, 81.0]}
+    # a and b overlap within their runs' range: not ranked; c is resolved from both.
+    assert resolved_tau(official, {"a": 90.0, "b": 95.0, "c": 70.0}) == (1.0, 2, 3)
+    assert resolved_tau(official, {"a": 90.0, "b": 95.0, "c": 92.0}) == (0.0, 2, 3)
+    tau, used, _ = resolved_tau({"a": [1.0], "b": [1.0]}, {"a": 1.0, "b": 2.0})
+    assert used == 0
+    assert tau != tau  # NaN: nothing to rank
