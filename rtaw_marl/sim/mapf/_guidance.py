@@ -17,9 +17,9 @@ A guide path is an A* search on edge costs ``1 + weight * contraflow`` with the 
 distance as heuristic (admissible: every edge costs at least 1). As a robot walks its
 path the edges behind it leave the flow; a robot pushed off its path, or given a new
 goal, gets a new one. PIBT then ranks a robot's neighbouring cells by BFS distance to the
-goal as before, the guide path's next cell first among cells up to two steps worse
-(:data:`GUIDE_TIE`): a detour of one cell around an oncoming stream is taken, a longer
-one is not.
+goal as before, with the guide path's next cell first (:data:`GUIDE_TIE`: it gains 2.5,
+more than the BFS distances of two neighbours of one cell can differ); when that cell
+is taken, the nearest free one.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from numba import njit
 __all__ = ["GUIDE_TIE", "guide_advance", "guide_compact", "guide_plan", "guide_ties"]
 
 #: The tie-break given to the guide path's next cell. PIBT's key is the BFS distance plus
-#: half the tie-break, so the next guide cell gains 2.5 over any other: it wins against
-#: a cell two steps nearer the goal, not three.
+#: half the tie-break, so the next guide cell gains 2.5 over any other: more than the
+#: two steps by which the distances of a cell's neighbours can differ.
 GUIDE_TIE = -5.0
 #: The reverse of each of ``nbr``'s columns (``+x, -x, +y, -y``).
 _REVERSE = np.array([1, 0, 3, 2], dtype=np.int64)
