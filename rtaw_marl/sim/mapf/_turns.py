@@ -34,10 +34,9 @@ __all__ = ["FORWARD", "TURN_CCW", "TURN_CW", "WAIT", "turn_step"]
 #: Action codes, LoRR's letters ``F``, ``R``, ``C``, ``W``.
 FORWARD, TURN_CW, TURN_CCW, WAIT = 0, 1, 2, 3
 #: LoRR's heading (0 east, 1 south, 2 west, 3 north) of each of ``nbr``'s four columns
-#: (``+x``, ``-x``, ``+y``, ``-y``: rows grow southwards).
+#: (``+x``, ``-x``, ``+y``, ``-y``: rows grow southwards). A swap of two pairs, so it is
+#: its own inverse: ``_HEADING_OF[h]`` is also the column in front of heading ``h``.
 _HEADING_OF = np.array([0, 2, 1, 3], dtype=np.int64)
-#: The column of ``nbr`` (and of the tie-breaks) in front of each heading: the inverse.
-_AHEAD = np.array([0, 2, 1, 3], dtype=np.int64)
 #: The tie-break of the cell a robot faces: below every other (they are in ``[0, 1)``).
 _PREFER_AHEAD = -0.5
 
@@ -127,7 +126,7 @@ def turn_step(
     m = pos.shape[0]
     nxt[:] = -1
     for i in range(m):
-        ahead = _AHEAD[heading[i]]
+        ahead = _HEADING_OF[heading[i]]
         tie[i, ahead] = min(tie[i, ahead], _PREFER_AHEAD)  # a guide's mark stays
         if target[i] >= 0:
             nxt[i] = target[i]

@@ -20,6 +20,7 @@ from rtaw_marl.sim.mapf import check_schedule
 from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
 from rtaw_marl.sim.options import navigator_option
 from rtaw_marl.sim.tasks import FixedTasks
+from tests.sim.mapf.conftest import random_fleet
 
 pytestmark = pytest.mark.unit
 
@@ -107,30 +108,17 @@ def step_is_conflict_free(before: np.ndarray, after: np.ndarray, nbr: np.ndarray
 def test_pibt_step_never_collides_on_random_grids(seed: int, fill: float) -> None:
     """Random obstacles, robots on a random share of the cells, random goals: twenty
     timesteps of pibt_step keep distinct cells, legal moves and no swaps."""
-    rng = np.random.default_rng(seed)
-    obstacles = rng.random((7, 9)) < 0.2
-    _, cells, nbr = compact_graph(obstacles)
-    if len(cells) < 2:
+    f = random_fleet(seed, fill)
+    if f is None:
         return
-    m = max(1, int(fill * len(cells)))
-    pos = rng.choice(len(cells), m, replace=False).astype(np.int64)
-    goals = rng.choice(len(cells), m).astype(np.int64)
-    fields = np.empty((m, len(cells)), dtype=np.int32)
-    for r in range(m):
-        bfs_compact(nbr, int(goals[r]), fields[r])
-    occ_now = np.full(len(cells), -1, dtype=np.int64)
-    occ_now[pos] = np.arange(m)
-    occ_next = np.full(len(cells), -1, dtype=np.int64)
-    nxt = np.empty(m, dtype=np.int64)
-    goal_field = np.where(rng.random(m) < 0.8, np.arange(m), -1).astype(np.int64)
     for _ in range(20):
-        before = pos.copy()
-        order = rng.permutation(m).astype(np.int64)
-        pibt_step(pos, order, goal_field, fields, nbr, rng.random((m, 5)), occ_now,
-                  occ_next, nxt)  # fmt: skip
-        step_is_conflict_free(before, pos, nbr)
-        assert (occ_next == -1).all()
-        assert (occ_now[pos] == np.arange(m)).all()
+        before = f.pos.copy()
+        order = f.rng.permutation(f.m).astype(np.int64)
+        pibt_step(f.pos, order, f.goal_field, f.fields, f.nbr, f.rng.random((f.m, 5)),
+                  f.occ_now, f.occ_next, f.nxt)  # fmt: skip
+        step_is_conflict_free(before, f.pos, f.nbr)
+        assert (f.occ_next == -1).all()
+        assert (f.occ_now[f.pos] == np.arange(f.m)).all()
 
 
 def warehouse(**sim: object) -> WarehouseSim:

@@ -22,6 +22,7 @@ from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph
 from rtaw_marl.sim.mapf._turns import FORWARD, TURN_CCW, TURN_CW, WAIT, turn_step
 from rtaw_marl.sim.options import navigator_option
 from rtaw_marl.sim.tasks import FixedTasks
+from tests.sim.mapf.conftest import random_fleet
 
 pytestmark = pytest.mark.unit
 
@@ -114,34 +115,23 @@ def test_a_forward_move_behind_a_turning_robot_waits() -> None:
 def test_turn_step_never_collides_on_random_grids(seed: int, fill: float) -> None:
     """Random obstacles, robots and goals: forty timesteps keep distinct cells, no swaps,
     forward moves only the way a robot faces, and at most a quarter turn when it stays."""
-    rng = np.random.default_rng(seed)
-    obstacles = rng.random((7, 9)) < 0.2
-    _, cells, nbr = compact_graph(obstacles)
-    if len(cells) < 2:
+    f = random_fleet(seed, fill)
+    if f is None:
         return
-    m = max(1, int(fill * len(cells)))
-    pos = rng.choice(len(cells), m, replace=False).astype(np.int64)
+    rng, m, pos, nbr, occ_now, occ_next = f.rng, f.m, f.pos, f.nbr, f.occ_now, f.occ_next
     heading = rng.integers(0, 4, m).astype(np.int64)
-    goals = rng.choice(len(cells), m)
-    fields = np.empty((m, len(cells)), dtype=np.int32)
-    for r in range(m):
-        bfs_compact(nbr, int(goals[r]), fields[r])
-    occ_now = np.full(len(cells), -1, dtype=np.int64)
-    occ_now[pos] = np.arange(m)
-    occ_next = np.full(len(cells), -1, dtype=np.int64)
     target = np.full(m, -1, dtype=np.int64)
-    nxt, action = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
-    goal_field = np.where(rng.random(m) < 0.8, np.arange(m), -1).astype(np.int64)
-    xy, forward = cells, np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])
+    action = np.empty(m, dtype=np.int64)
+    forward = np.array([[1, 0], [0, 1], [-1, 0], [0, -1]])
     for _ in range(40):
         before, facing = pos.copy(), heading.copy()
         order = rng.permutation(m).astype(np.int64)
-        turn_step(pos, heading, target, order, goal_field, fields, nbr, rng.random((m, 5)),
-                  occ_now, occ_next, nxt, action)  # fmt: skip
+        turn_step(pos, heading, target, order, f.goal_field, f.fields, nbr, rng.random((m, 5)),
+                  occ_now, occ_next, f.nxt, action)  # fmt: skip
         assert len(np.unique(pos)) == m
         moved = pos != before
         assert (action[moved] == FORWARD).all()
-        assert (xy[pos[moved]] - xy[before[moved]] == forward[facing[moved]]).all()
+        assert (f.cells[pos[moved]] - f.cells[before[moved]] == forward[facing[moved]]).all()
         where = {int(c): i for i, c in enumerate(before)}
         for i in np.flatnonzero(moved):
             j = where.get(int(pos[i]))
