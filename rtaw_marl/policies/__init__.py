@@ -19,6 +19,7 @@ from rtaw_marl.policies.batch import BatchAssignment
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.policies.hindsight import Hindsight
 from rtaw_marl.policies.lookahead import Hungarian, Lookahead
+from rtaw_marl.policies.pairs import PairGreedy
 
 if TYPE_CHECKING:
     from rtaw_marl.policies.network import NetworkPolicy, load_policy
@@ -35,13 +36,14 @@ __all__ = [
     "KitGreedy",
     "Lookahead",
     "NetworkPolicy",
+    "PairGreedy",
     "Policy",
     "RandomPolicy",
     "load_policy",
     "make_baseline",
 ]
 
-_Factory = Callable[[BaselinesConfig], "BaselinePolicy | BatchAssignment | Hindsight"]
+_Factory = Callable[[BaselinesConfig], "BaselinePolicy | BatchAssignment | Hindsight | PairGreedy"]
 
 #: Every rule evaluated by name (``rtaw-eval policy=[...]``): its parameters -> the rule,
 #: not yet bound to an env (:func:`make_baseline` binds it).
@@ -58,6 +60,7 @@ BASELINES: dict[str, _Factory] = {
         region=p.batch_region, cap=p.batch_cap, penalty=p.batch_penalty, max_batch=p.batch_max
     ),
     Hindsight.name: lambda p: Hindsight(p.hindsight_horizon),
+    PairGreedy.name: lambda _: PairGreedy(),
 }
 
 #: Names served lazily from :mod:`.network` (torch).
@@ -66,7 +69,7 @@ _NETWORK = ("NetworkPolicy", "load_policy")
 
 def make_baseline(
     name: str, *, env: Any = None, params: BaselinesConfig | None = None
-) -> BaselinePolicy | BatchAssignment | Hindsight:
+) -> BaselinePolicy | BatchAssignment | Hindsight | PairGreedy:
     """Build the rule registered as ``name``.
 
     ``make_baseline(name)`` is all evaluation needs: ``act_sim(sim)`` takes the
@@ -76,7 +79,7 @@ def make_baseline(
 
     Args:
         name: ``mpdm``, ``rbts``, ``lorr_default``, ``random``, ``lookahead``,
-            ``hungarian``, ``batch`` or ``hindsight``.
+            ``hungarian``, ``batch``, ``pair_greedy`` or ``hindsight``.
         env: A PettingZoo or Gymnasium warehouse env (wrapped or not) or its
             ``WarehouseSim``: the rule takes its distance model, scale and completion noise's
             mean (:meth:`BaselinePolicy.bind`); ``None``: a rule for ``act_sim``.

@@ -38,12 +38,17 @@ def lorr_scenario(
         starts: ``file`` or ``random`` start cells (``tasks.starts``).
         navigator: The navigator (``pibt`` executes collision-free at any fleet size).
         **sim: Further simulator keys (``horizon=1000``), checked by
-            :class:`~rtaw_marl.sim.config.SimConfig`.
+            :class:`~rtaw_marl.sim.config.SimConfig`. ``reassign`` (LoRR's
+            reassignment) defaults to whether the navigator is ``pibt``, the one that
+            can take a task from a robot on its way.
     """
     if not isinstance(problem, LoRRProblem):
         problem = read_problem(problem)
     horizon = int(sim.pop("horizon", LORR_SIM["horizon"]))  # type: ignore[call-overload]
     keys = {**lorr_sim(problem, num_robots, horizon), **sim}
+    name_of = navigator if isinstance(navigator, str) else navigator.get("name")
+    if "reassign" not in sim:
+        keys["reassign"] = name_of == "pibt"
     name = f"lorr_{problem.path.stem}"
     return Scenario(
         name=name,

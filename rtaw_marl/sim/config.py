@@ -39,6 +39,11 @@ class SimConfig:
             when its task is finished (LoRR's reveal window: ``N`` counts the tasks
             revealed and not finished, assigned ones included); the freed robot's
             slot is refilled just before its next decision. Needs ``N > M``.
+        reassign: LoRR's reassignment (needs ``refill=finish`` and ``navigator=pibt``):
+            a task stays in its slot, *held* by its robot, until the robot reaches its
+            pickup, and a free robot may take a held task (the holder is then free
+            where it stands, at once); a task changes hands at most once per timestep.
+            Rules that do not use it choose among the unassigned tasks as before.
         noise_mean: Mean of the Gaussian noise added to completion times (seconds),
             at least 0: a delay on top of the travel time (single draws below 0 end a
             task no earlier than its decision).
@@ -55,6 +60,7 @@ class SimConfig:
     episode_mode: str = "drain"
     horizon: int | None = None
     refill: str = "assign"
+    reassign: bool = False
     noise_mean: float = 0.25
     noise_var: float = 0.25
     reward: str = "ttd"
@@ -81,6 +87,13 @@ class SimConfig:
             raise ConfigError(
                 f"sim.refill=finish needs sim.queue_len > sim.num_robots (the revealed "
                 f"tasks include the M in progress), got {self.queue_len} <= {self.num_robots}"
+            )
+        if not isinstance(self.reassign, bool):
+            raise ConfigError(f"sim.reassign must be true or false, got {self.reassign!r}")
+        if self.reassign and self.refill != "finish":
+            raise ConfigError(
+                "sim.reassign=true needs sim.refill=finish (LoRR's reveal window: a held "
+                "task keeps its slot until it is picked up)"
             )
         if self.reward not in REWARDS:
             raise ConfigError(

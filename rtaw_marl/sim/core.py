@@ -59,7 +59,7 @@ __all__ = ["SimState", "WarehouseSim"]
 _STATE_ARRAYS = (
     "tasks", "task_length", "robot_start_xy", "robot_busy", "task_arrival", "task_assigned",
     "task_ttd", "task_finished", "task_robot", "queue_ids", "robot_xy", "robot_free_at",
-    "queue_mask", "queue_rows", "queue_length", "_owed",
+    "queue_mask", "queue_rows", "queue_length", "_owed", "queue_holder", "task_moved",
 )  # fmt: skip
 _STATE_SCALARS = ("robot", "time", "decisions", "done", "truncated", "last_ttd", "_next_task")
 
@@ -102,6 +102,9 @@ class WarehouseSim:
         queue_mask: ``bool [N]`` which slots hold a task (the legal actions).
         queue_rows: ``int64 [N, 4]`` task row per slot, zeros for an empty slot.
         queue_length: ``float64 [N]`` task length per slot, 0 for an empty slot.
+        queue_holder: ``int64 [N]`` with ``sim.reassign``: the robot holding the slot's
+            task (assigned, not yet picked up), ``-1`` otherwise; such a slot keeps its
+            row and length and is not in :attr:`queue_mask`.
         tasks: ``int64 [T, 4]`` every task of the episode in arrival order.
         task_length: ``float64 [T]`` origin -> destination distance per task (NaN until
             the task enters the queue).
@@ -155,8 +158,15 @@ class WarehouseSim:
         self.queue_rows = buffers.queue_rows
         self.queue_length = buffers.queue_length
         self.queue_ids = np.full(config.queue_len, -1, dtype=np.int64)
+        self.queue_holder = np.full(config.queue_len, -1, dtype=np.int64)
         self._executor = InstantTravel() if executor is None else executor
         self._executor.bind(config, layout, distance_model)
+        self._reassign = config.reassign
+        if self._reassign and not self._executor.releases:
+            raise ConfigError(
+                f"sim.reassign=true needs an executor that moves robots timestep by "
+                f"timestep (navigator=pibt), not {self._executor.name!r}; or sim.reassign=false"
+            )
         self.done = True
         self.truncated = False
 
@@ -185,8 +195,10 @@ class WarehouseSim:
         self.task_ttd = np.full(total, np.nan)
         self.task_finished = np.full(total, np.nan)
         self.task_robot = np.full(total, -1, dtype=np.int64)
+        self.task_moved = np.full(total, np.nan)  # when the task last changed hands
 
         self.queue_ids[:] = -1
+        self.queue_holder[:] = -1
         self.queue_mask[:] = False
         self.queue_rows[:] = 0
         self.queue_length[:] = 0.0
@@ -332,7 +344,9 @@ class WarehouseSim:
             raise InvalidActionError("the episode is over; call reset()")
         slot = slot_index(action, self.queue_len)
         if not self.queue_mask[slot]:
-            raise InvalidActionError(f"action {slot} names an empty queue slot")
+            if not (self._reassign and self.queue_holder[slot] >= 0):
+                raise InvalidActionError(f"action {slot} names an empty queue slot")
+            self._take_held(slot)
 
         robot, now = self.robot, self.time
         task = int(self.queue_ids[slot])
@@ -350,8 +364,14 @@ class WarehouseSim:
         # Busy from assignment until free again (noise included), so idle >= 0.
         self.robot_busy[robot] += finish - now
         if self._refill_on_finish:
-            # LoRR's window: the task stays revealed until it is finished.
-            self._empty(slot)
+            # LoRR's window: the task stays revealed until it is finished (and, with
+            # reassignment, in its slot until it is picked up).
+            if self._reassign and self.executor.started(np.array([task]))[0]:
+                self._empty(slot)
+            elif self._reassign:
+                self._hold(slot, robot)
+            else:
+                self._empty(slot)
             self._owed[robot] = True
         else:
             self._refill(slot, task, now)
@@ -375,8 +395,64 @@ class WarehouseSim:
             return -length
         return -(ttd + length)
 
+    def reassignable(self) -> np.ndarray:
+        """``bool [N]``: the held slots a free robot may take now (``sim.reassign``): the
+        task not picked up and not already moved in this timestep. All ``False``
+        without reassignment."""
+        held = self.queue_holder >= 0
+        moved = self.task_moved[np.maximum(self.queue_ids, 0)] == self.time
+        return held & ~moved
+
+    def legal_actions(self) -> np.ndarray:
+        """``bool [N]``: the slots the selected robot may take: :attr:`queue_mask`, and
+        with ``sim.reassign`` the :meth:`reassignable` ones."""
+        if not self._reassign:
+            return self.queue_mask.copy()
+        return self.queue_mask | self.reassignable()
+
+    def robot_cells(self, robots: np.ndarray) -> np.ndarray:
+        """``int64 [R, 2]`` where ``robots`` stand now: a free robot at its cell, a busy
+        one (collision-aware lifelong executors) where it is on its way; with instant
+        travel, where each is next free."""
+        positions = getattr(self._executor, "positions", None)
+        robots = np.asarray(robots, dtype=np.int64)
+        return self.robot_xy[robots].copy() if positions is None else positions(robots)
+
+    def distances_from(self, xy: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        """Distances ``float64 [R, K]`` from the cells ``xy int [R, 2]`` to the origins
+        of ``slots int [K]`` (held slots included)."""
+        return self._slots.distances_from(np.asarray(xy, dtype=np.int64), slots)
+
+    def _hold(self, slot: int, robot: int) -> None:
+        self.queue_mask[slot] = False
+        self.queue_holder[slot] = robot
+        self._queue_distances.slot_changed(slot)
+
+    def _take_held(self, slot: int) -> None:
+        """The selected robot takes a held task: its holder is free now where it stands."""
+        task, holder = int(self.queue_ids[slot]), int(self.queue_holder[slot])
+        if self.task_moved[task] == self.time:
+            raise InvalidActionError(
+                f"action {slot}: task {task} already changed hands at t={self.time:g}"
+            )
+        self.robot_xy[holder] = self._executor.release(holder, self.time)
+        self.robot_free_at[holder] = self.time
+        self._queue_distances.robot_moved(holder)
+        self._owed[holder] = False  # its task is not finished: nothing new is revealed
+        self.task_moved[task] = self.time
+        self.queue_mask[slot] = True  # the common path assigns it (and holds it again)
+        self.queue_holder[slot] = -1
+
+    def _drop_started(self) -> None:
+        """Held tasks picked up since the last decision leave their slots."""
+        held = np.flatnonzero(self.queue_holder >= 0)
+        if len(held):
+            for slot in held[self._executor.started(self.queue_ids[held])].tolist():
+                self._empty(slot)
+
     def _empty(self, slot: int) -> None:
         self._queue_distances.slot_changed(slot)
+        self.queue_holder[slot] = -1
         self.queue_ids[slot] = -1
         self.queue_mask[slot] = False
         self.queue_rows[slot] = 0
@@ -417,10 +493,12 @@ class WarehouseSim:
             self.done = self.truncated = True
             self._executor.finish_at(self._horizon)
             return
+        if self._reassign:
+            self._drop_started()
         if self._refill_on_finish and self._owed[self.robot]:
             # The robot's last task is finished now: one more task is revealed.
             self._owed[self.robot] = False
-            empty = np.flatnonzero(~self.queue_mask)
+            empty = np.flatnonzero(~self.queue_mask & (self.queue_holder < 0))
             if len(empty):
                 self._refill(int(empty[0]), -1, self.time)
 

@@ -278,18 +278,20 @@ class GridDistance(DistanceModel):
         targets = np.asarray(targets, dtype=np.int64).reshape(-1, 2)
         src = self._padded_index(sources)
         d = np.empty((len(sources), len(targets)), dtype=np.float64)
-        if len(targets) <= _GATHER_COLUMNS:
-            # A few targets (a rollout's queue): gather from each cached field in place;
-            # stacking them first copied whole fields (2.6 MB for 10 at 256x256) to read
-            # M + N entries of each.
+        step = max(1, self._capacity // 2)
+        if len(targets) <= _GATHER_COLUMNS or len(sources) * 8 < self._free_padded.size:
+            # Few targets (a rollout's queue) or few sources (a scheduler's robots against
+            # its pool): gather from each cached field in place; stacking whole fields
+            # first (2.6 MB for 10 at 256x256) to read a few entries of each costs more.
             keys = self._padded_index(targets).tolist()
-            self._compute_missing(keys)
-            for j, key in enumerate(keys):
-                d[:, j] = self._cache[key][src]
-            self._evict()
+            for start in range(0, len(keys), step):
+                chunk = keys[start : start + step]
+                self._compute_missing(chunk)
+                for j, key in enumerate(chunk, start):
+                    d[:, j] = self._cache[key][src]
+                self._evict()
         else:
             # Chunks of targets bound the memory of stacked fields (260 KiB each at 256^2).
-            step = max(1, self._capacity // 2)
             for start in range(0, len(targets), step):
                 d[:, start : start + step] = self.fields(targets[start : start + step])[:, src].T
         if (d < 0).any():

@@ -183,6 +183,31 @@ class Executor(ABC):
             ConfigError: Robots move independently: there is no schedule.
         """
 
+    #: Whether :meth:`release` and :meth:`started` exist (``sim.reassign`` needs them).
+    releases: bool = False
+
+    def release(self, robot: int, now: float) -> np.ndarray:
+        """Take ``robot``'s task away before it reaches the pickup: the robot is free at
+        ``now`` where it stands (LoRR's reassignment).
+
+        Returns:
+            ``int64 [2]`` the robot's cell ``(x, y)``.
+
+        Raises:
+            ConfigError: This executor cannot release robots (:attr:`releases`).
+        """
+        del robot, now
+        raise ConfigError(f"the {self.name!r} executor cannot take a task from its robot")
+
+    def started(self, tasks: np.ndarray) -> np.ndarray:
+        """``bool [K]``: whether each of ``tasks`` (assigned ids) was picked up.
+
+        Raises:
+            ConfigError: This executor cannot tell (:attr:`releases`).
+        """
+        del tasks
+        raise ConfigError(f"the {self.name!r} executor does not report pickups as they happen")
+
     def stats(self) -> dict[str, float]:
         """Counters of the episode (none by default)."""
         return {}

@@ -71,6 +71,7 @@ LORR_SIM: dict[str, object] = {
     "episode_mode": "horizon",
     "horizon": LORR_HORIZON,
     "refill": "finish",
+    "reassign": True,
 }
 
 _KEYS = ("mapFile", "agentFile", "taskFile", "teamSize", "numTasksReveal")

@@ -249,3 +249,35 @@ def test_judge_table_ranks_and_gains() -> None:
     assert row + " 1 / 2 |" in text
     assert "tau over the schedulers in both): -1.00" in text
     assert rank_agreement({"a": 3, "b": 2, "c": 1}, {"a": 30, "b": 20, "c": 10}) == 1.0
+
+
+def test_pair_greedy_reschedules_by_lorr_rules(tmp_path: Path) -> None:
+    """The winner's whole-fleet scheduler keeps LoRR's rules for 60 timesteps (no task
+    changed after its first errand, one robot per task), reassigns tasks not started,
+    and matches every robot at t = 0 by the greedy pair cost."""
+    problem = _tiny(tmp_path)
+    scheduler = build_scheduler(
+        RunSpec(problem=str(problem), policy="pair_greedy", stats="-", timesteps=1)
+    )
+    lorr = FakeLoRR(problem)
+    first = scheduler.plan(lorr.step(), 1.0)
+    # Robot 0 at cell 0, robot 1 at cell 17: the cheapest pair of 5 x travel + length
+    # first, then the cheapest task left for the other robot.
+    nav, width = scheduler.distance_model, lorr.width
+    xy = lambda loc: np.array([[loc % width, loc // width]])  # noqa: E731
+    cost = {
+        (r, t): 5 * nav.distance(xy(at), xy(lorr.pool[t]["locs"][0]))[0]
+        + nav.distance(xy(lorr.pool[t]["locs"][0]), xy(lorr.pool[t]["locs"][-1]))[0]
+        for r, at in enumerate((0, 17)) for t in lorr.pool
+    }  # fmt: skip
+    (r0, t0) = min(cost, key=lambda rt: (cost[rt], rt))
+    assert first[r0] == t0
+    other = 1 - r0
+    rest = {t: c for (r, t), c in cost.items() if r == other and t != t0}
+    assert cost[(other, first[other])] == min(rest.values())
+    lorr.apply(first, nav)
+    for _ in range(59):
+        lorr.apply(scheduler.plan(lorr.step(), 1.0), nav)
+    assert lorr.errors == []
+    assert lorr.finished >= 10
+    assert scheduler.stats.deferred == 0

@@ -24,7 +24,9 @@ from typing import Any
 
 import numpy as np
 
+from rtaw_marl.integrations.lorr.pair_scheduler import PairScheduler
 from rtaw_marl.integrations.lorr.scheduler import PolicyScheduler, Timestep, stats_dict
+from rtaw_marl.policies.pairs import PairGreedy
 from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = ["SPEC_VARIABLE", "RunSpec", "pyTaskScheduler"]
@@ -72,8 +74,9 @@ class RunSpec:
         return cls(**json.loads(Path(path).read_text(encoding="utf-8")))
 
 
-def build_scheduler(spec: RunSpec) -> PolicyScheduler:
-    """The mirror simulator of ``spec.problem`` and the policy, ready to plan."""
+def build_scheduler(spec: RunSpec) -> PolicyScheduler | PairScheduler:
+    """The mirror simulator of ``spec.problem`` and the policy, ready to plan
+    (``pair_greedy``: its whole-fleet version, which reschedules every timestep)."""
     from rtaw_marl.policies import BaselinesConfig, make_baseline
     from rtaw_marl.policies.user import import_policy, is_import_spec
     from rtaw_marl.scenarios.lorr import lorr_scenario
@@ -85,8 +88,12 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler:
     # Instant travel on the map; one decision per free robot and timestep at most, and
     # no horizon of its own: LoRR's simulator ends the episode.
     sim = build_sim(
-        scenario.with_sim(num_tasks=m + int(scenario.sim["queue_len"]), horizon=10**9).spec()
+        scenario.with_sim(
+            num_tasks=m + int(scenario.sim["queue_len"]), horizon=10**9, reassign=False
+        ).spec()
     )
+    if spec.policy == PairGreedy.name:
+        return PairScheduler(sim.layout, sim.distance_model)
     if is_import_spec(spec.policy):
         if spec.search_path is not None and spec.search_path not in sys.path:
             sys.path.append(spec.search_path)
@@ -121,7 +128,7 @@ class pyTaskScheduler:
             self.scheduler = build_scheduler(self.spec)
             left = 0.5 * preprocess_time_limit / 1000.0 - (time.perf_counter() - start)
             self.scheduler.preload(left)
-            layout = self.scheduler.sim.layout
+            layout = self.scheduler.layout
             grid = np.asarray(list(self.env.map), dtype=bool).reshape(self.env.rows, self.env.cols)
             if grid.shape != layout.obstacles.shape or not np.array_equal(grid, layout.obstacles):
                 raise ValueError(f"LoRR's map is not the map of {self.spec.problem}")

@@ -30,6 +30,7 @@ import numpy as np
 from rtaw_marl.policies.base import Policy
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.external import DecisionState, load_decisions
+from rtaw_marl.sim.layout import Layout
 
 __all__ = ["PolicyScheduler", "SchedulerStats", "Timestep"]
 
@@ -65,6 +66,7 @@ class SchedulerStats:
     calls: int = 0
     decisions: int = 0
     deferred: int = 0
+    reassigned: int = 0
     seconds: float = 0.0
     max_call_s: float = 0.0
     errors: list[str] = field(default_factory=list)
@@ -114,6 +116,11 @@ class PolicyScheduler:
         self._rest = np.zeros(m)
         self._drop = np.zeros(m, dtype=np.int64)
         self.stats = SchedulerStats()
+
+    @property
+    def layout(self) -> Layout:
+        """The problem's map (the mirror's)."""
+        return self.sim.layout
 
     def preload(self, budget_s: float) -> int:
         """Compute the distance fields of the cells of the problem's first tasks, in
@@ -286,6 +293,7 @@ def stats_dict(stats: SchedulerStats) -> Mapping[str, object]:
         "calls": stats.calls,
         "decisions": stats.decisions,
         "deferred": stats.deferred,
+        "reassigned": stats.reassigned,
         "seconds": round(stats.seconds, 3),
         "max_call_s": round(stats.max_call_s, 4),
         "errors": list(stats.errors),

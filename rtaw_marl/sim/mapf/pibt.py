@@ -133,6 +133,7 @@ class PIBTExecutor(Executor):
     """
 
     name = "pibt"
+    releases = True
 
     def __init__(
         self, *, stall_limit: int, patience: int, record: bool, turns: bool, guidance: float,
@@ -199,6 +200,7 @@ class PIBTExecutor(Executor):
         self.target = np.full(m, -1, dtype=np.int64)  # committed next cells (turns)
         self.action = np.full(m, WAIT, dtype=np.int64)
         self.turn_actions = 0
+        self.released = 0
         self._guide_reset(m)
         self.free = [int(r) for r in np.flatnonzero(records.robot_free_at <= 0)]
         heapq.heapify(self.free)
@@ -227,6 +229,26 @@ class PIBTExecutor(Executor):
             self._picked_up(robot)
         self.rec.robot_free_at[robot] = now + distance + length
         return distance, now + distance + length
+
+    def release(self, robot: int, now: float) -> np.ndarray:
+        if int(now) != self.t or self.phase[robot] != _TO_PICKUP:
+            raise InvalidActionError(
+                f"pibt: robot {robot} has no task to give up at {now} (t={self.t})"
+            )
+        self.phase[robot] = _IDLE
+        self.task[robot] = -1
+        self._set_goal(robot, -1)
+        self.rec.robot_free_at[robot] = self.t
+        self.released += 1
+        heapq.heappush(self.free, robot)
+        return self.cells[self.pos[robot]].astype(np.int64)
+
+    def started(self, tasks: np.ndarray) -> np.ndarray:
+        return self.pickup_at[np.asarray(tasks, dtype=np.int64)] >= 0
+
+    def positions(self, robots: np.ndarray) -> np.ndarray:
+        """``int64 [R, 2]`` the cells ``(x, y)`` where ``robots`` stand now."""
+        return self.cells[self.pos[np.asarray(robots, dtype=np.int64)]].astype(np.int64)
 
     def next_robot(self, now: float) -> tuple[int, float]:
         quiet = 0
@@ -460,4 +482,6 @@ class PIBTExecutor(Executor):
             out["turn_actions"] = float(self.turn_actions)
         if self.guidance > 0:
             out["guide_paths"] = float(self.guide_paths)
+        if self.released:
+            out["reassigned"] = float(self.released)
         return out

@@ -1,0 +1,134 @@
+"""``pair_greedy`` in LoRR's simulator: the 2024 winner's scheduler, with reassignment.
+
+Every timestep (as ``Straple/OMAPFS``'s ``GreedyScheduler``): the robots without a
+started task (free, or on their way to a first errand) and the tasks not started (not
+assigned, or assigned and the first errand not reached) are matched greedily on
+:func:`~rtaw_marl.policies.pairs.pair_costs` (5 x travel to the first errand + the task's
+length), cheapest pair first (:func:`~rtaw_marl.policies.pairs.greedy_pairs`). A robot
+may so lose a task it had not started, or get another one: LoRR's ``TaskManager``
+allows both until the robot reaches the first errand. Robots with a started task keep it.
+
+Differences from the winner's code, all in what it adds for its own planner: it hands
+every robot left without a task some task (its planner needs a goal for each; the kit's
+planner does not), and it refreshes each robot's sorted list only as its time allows
+(here every list is computed every timestep; ``max_call_s`` says what that costs).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from rtaw_marl.integrations.lorr.scheduler import SchedulerStats, Timestep
+from rtaw_marl.policies.pairs import PAIR_WEIGHT, greedy_pairs, pair_costs
+from rtaw_marl.sim.distances import DistanceModel
+from rtaw_marl.sim.layout import Layout
+
+__all__ = ["PairScheduler"]
+
+
+class PairScheduler:
+    """LoRR's ``plan`` for the pair-greedy rule (the module docstring).
+
+    Args:
+        layout: The problem's map.
+        distance_model: Distances on it (shortest paths).
+        weight: Cost of a cell of travel to the first errand against one of the task's
+            length.
+        clock: Seconds (``time.perf_counter``).
+    """
+
+    def __init__(
+        self,
+        layout: Layout,
+        distance_model: DistanceModel,
+        weight: float = PAIR_WEIGHT,
+        clock: Callable[[], float] = time.perf_counter,
+    ) -> None:
+        self.layout, self.distance_model = layout, distance_model
+        self.weight, self.clock = float(weight), clock
+        self.width = layout.width
+        # Per known task: first errand (linearized cell) and length (travel through all).
+        self._first: dict[int, int] = {}
+        self._length: dict[int, float] = {}
+        self._started: set[int] = set()
+        self.stats = SchedulerStats()
+
+    def preload(self, budget_s: float) -> int:
+        """Nothing to preload (kept for the entry's interface); returns 0."""
+        del budget_s
+        return 0
+
+    def plan(self, step: Timestep, budget_s: float) -> list[int]:
+        """The schedule for this timestep: each robot's task id or ``-1``.
+
+        Args:
+            step: LoRR's state.
+            budget_s: Seconds for scheduling (not enforced: one matching per timestep;
+                the time taken is counted in ``stats``).
+        """
+        del budget_s
+        start = self.clock()
+        schedule = np.asarray(step.schedule, dtype=np.int64)
+        self._sync(step)
+        # LoRR is asked about a robot's task until it is known to be started (one call
+        # into the kit per robot on its way to a first errand).
+        for task in schedule[schedule >= 0].tolist():
+            if task not in self._started and step.progress(task) > 0:
+                self._started.add(task)
+        started = np.fromiter(self._started, dtype=np.int64, count=len(self._started))
+        robots = np.flatnonzero(~np.isin(schedule, started) | (schedule < 0))
+        tasks = np.array(sorted(set(self._first) - self._started), dtype=np.int64)
+        proposed = schedule.copy()
+        if len(robots) and len(tasks):
+            first = np.array([self._first[t] for t in tasks.tolist()], dtype=np.int64)
+            length = np.array([self._length[t] for t in tasks.tolist()])
+            at = np.asarray(step.locations, dtype=np.int64)[robots]
+            cost = pair_costs(
+                self.distance_model.distance_matrix(self._xy(at), self._xy(first)),
+                length, self.weight,
+            )  # fmt: skip
+            cols = greedy_pairs(cost)
+            proposed[robots] = np.where(cols >= 0, tasks[np.maximum(cols, 0)], -1)
+        else:
+            proposed[robots] = -1
+        changed = proposed != schedule
+        self.stats.decisions += int((changed & (proposed >= 0)).sum())
+        self.stats.reassigned += int((changed & (schedule >= 0)).sum())
+        spent = self.clock() - start
+        self.stats.calls += 1
+        self.stats.seconds += spent
+        self.stats.max_call_s = max(self.stats.max_call_s, spent)
+        return proposed.tolist()
+
+    def _sync(self, step: Timestep) -> None:
+        pool = set(int(t) for t in step.pool)
+        for task in set(self._first) - pool:  # finished
+            del self._first[task], self._length[task]
+            self._started.discard(task)
+        new = sorted(pool - set(self._first))
+        if not new:
+            return
+        errands = [np.asarray(step.read_task(t)[0], dtype=np.int64) for t in new]
+        legs = self.distance_model.distance(
+            self._xy(np.concatenate([e[:-1] for e in errands])),
+            self._xy(np.concatenate([e[1:] for e in errands])),
+        )
+        ends = np.cumsum([len(e) - 1 for e in errands])
+        for task, locs, total in zip(new, errands, _sums(legs, ends), strict=True):
+            self._first[task] = int(locs[0])
+            self._length[task] = float(total)
+
+    def _xy(self, locs: np.ndarray) -> np.ndarray:
+        locs = np.asarray(locs, dtype=np.int64)
+        return np.stack([locs % self.width, locs // self.width], axis=-1)
+
+
+def _sums(legs: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Each task's travel through its errands: its legs ``legs[ends[i-1]:ends[i]]``
+    summed (a task of one errand has none: length 0)."""
+    bounds = np.concatenate([[0], ends])
+    cum = np.concatenate([[0.0], np.cumsum(legs)])
+    return cum[bounds[1:]] - cum[bounds[:-1]]

@@ -1,0 +1,107 @@
+"""LoRR's reassignment in the simulator (``sim.reassign``): held tasks, taking one frees
+its holder where it stands, a task moves at most once per timestep, and the fleet's
+episodes stay valid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.sim.config import SimConfig
+from rtaw_marl.sim.core import WarehouseSim
+
+pytestmark = pytest.mark.integration
+
+
+def _sim(navigator: object = "pibt", **sim: object) -> WarehouseSim:
+    from rtaw_marl.scenarios.lorr import lorr_scenario
+    from rtaw_marl.sim.builder import build_sim
+
+    scenario = lorr_scenario(
+        "builtin:random_32_32_20_100.json", horizon=120, navigator=navigator, **sim
+    )
+    return build_sim(scenario.spec())
+
+
+def test_reassign_needs_the_reveal_window_and_pibt() -> None:
+    with pytest.raises(ConfigError, match=r"sim\.refill=finish"):
+        SimConfig(reassign=True)
+    with pytest.raises(ConfigError, match="true or false"):
+        SimConfig(refill="finish", queue_len=20, reassign="yes")  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="navigator=pibt"):
+        _sim(navigator="astar", reassign=True)
+    assert _sim().config.reassign  # LoRR's rules by default under PIBT
+    assert not _sim(navigator="astar").config.reassign
+
+
+def _play_until_held(sim: WarehouseSim) -> None:
+    """Assign queued tasks until a free robot faces a reassignable one."""
+    while not sim.reassignable().any():
+        sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
+
+
+def test_taking_a_held_task_frees_its_holder_where_it_stands() -> None:
+    sim = _sim()
+    sim.reset(0)
+    _play_until_held(sim)
+    slot = int(np.flatnonzero(sim.reassignable())[0])
+    holder, task, taker = int(sim.queue_holder[slot]), int(sim.queue_ids[slot]), sim.robot
+    where = sim.robot_cells([holder])[0]
+    now = sim.time
+    legal = sim.legal_actions()
+    assert legal[slot]
+    assert not sim.queue_mask[slot]
+    sim.step(slot)
+    assert sim.task_robot[task] == taker
+    # Held again by its taker, unless the taker stood on the pickup (then picked up).
+    assert sim.queue_holder[slot] == taker or sim.queue_ids[slot] != task
+    np.testing.assert_array_equal(sim.robot_xy[holder], where)
+    assert sim.robot_free_at[holder] == now
+    assert holder in sim.free_robots().tolist() or sim.robot == holder
+    assert sim.time == now  # the holder decides in the same timestep
+    assert not sim.reassignable()[slot]  # moved once this timestep
+    with pytest.raises(InvalidActionError, match="already changed hands"):
+        sim.step(slot)
+
+
+def test_the_pool_keeps_its_size_and_episodes_are_valid() -> None:
+    """Random takes of held tasks: every revealed, unfinished task is queued, held or
+    picked up, the window's count never changes, and the schedule passes the checker."""
+    from rtaw_marl.sim.mapf.conflicts import check_schedule
+
+    sim = _sim()
+    rng = np.random.default_rng(1)
+    sim.reset(1)
+    while not sim.done:
+        revealed = ~np.isnan(sim.task_arrival)
+        unfinished = revealed & ~(sim.task_finished <= sim.time)
+        # Queued + held slots + picked-up tasks in progress = the window.
+        in_slots = int(sim.queue_mask.sum() + (sim.queue_holder >= 0).sum())
+        assert in_slots <= sim.queue_len
+        assert unfinished.sum() >= in_slots
+        held = np.flatnonzero(sim.reassignable())
+        if len(held) and rng.random() < 0.5:
+            sim.step(int(rng.choice(held)))
+        else:
+            sim.step(int(rng.choice(np.flatnonzero(sim.queue_mask))))
+    assert sim.executor.stats()["reassigned"] > 0
+    check_schedule(sim.layout, sim.schedule())
+
+
+def test_rules_that_ignore_reassignment_never_take_held_tasks() -> None:
+    """MPDM chooses among the queued tasks only: no robot is ever released."""
+    from rtaw_marl.policies import make_baseline
+
+    sim = _sim()
+    policy = make_baseline("mpdm")
+    sim.reset(2)
+    policy.reset(2)
+    held_seen = False
+    while not sim.done:
+        held_seen |= bool(sim.reassignable().any())
+        slot = policy.act_sim(sim)
+        assert sim.queue_mask[slot]
+        sim.step(slot)
+    assert held_seen
+    assert "reassigned" not in sim.executor.stats()
