@@ -229,18 +229,27 @@ class AgentViews:
     def observe(self, robot: int) -> dict[str, Any]:
         """``{"observation": features, "action_mask": int8 [N]}`` of ``robot``.
 
-        The mask is the queue's occupancy for the acting robot of a live decision and all
-        zeros otherwise.
+        The mask is the acting robot's legal slots in a live decision (the queued tasks,
+        and with ``sim.reassign`` the reassignable ones) and all zeros otherwise. With
+        ``sim.reassign`` the observation also holds ``"reassignable": int8 [N]``, the
+        slots of tasks held by a robot on its way to the pickup that the acting robot
+        may take (zeros for the other agents).
         """
         sim = self.sim
         self._refresh()
         if robot == sim.robot and not sim.done:
             if self._acting is None:
                 self._acting = self._acting_view()
-            return {"observation": self._acting, "action_mask": self._mask}
-        if self._others is None:
-            self._others = self._other_views()
-        return {"observation": self._pick(robot), "action_mask": self._zero_mask}
+            out = {"observation": self._acting, "action_mask": self._mask}
+            held = self._held
+        else:
+            if self._others is None:
+                self._others = self._other_views()
+            out = {"observation": self._pick(robot), "action_mask": self._zero_mask}
+            held = self._zero_mask
+        if sim.config.reassign:
+            out["reassignable"] = held
+        return out
 
     def observe_all(self) -> tuple[Features, np.ndarray]:
         """Every robot's observation at once, in robot order.
@@ -270,7 +279,8 @@ class AgentViews:
         sim = self.sim
         if self._stamp == sim.decisions:
             return
-        self._mask = sim.queue_mask.astype(np.int8)
+        self._mask = sim.legal_actions().astype(np.int8)
+        self._held = sim.reassignable().astype(np.int8)
         self._zero_mask = np.zeros(sim.queue_len, dtype=np.int8)
         self._acting = self._others = self._all = None
         self._stamp = sim.decisions

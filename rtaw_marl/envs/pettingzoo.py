@@ -82,6 +82,13 @@ modifying it. The acting robot's features are bit-identical to the batched Torch
 than the selected one is all zeros (TorchRL's `PettingZooWrapper` gives those rows an
 all-True mask and marks the acting row in `("agents", "mask")`).
 
+With LoRR's reassignment (`sim.reassign=true`, the default of `scenario=lorr`) a task
+stays in its slot, *held*, until its robot reaches the pickup; the observation gains
+`reassignable` `[N]` int8 (1 for the held slots the acting robot may take: not moved
+yet in this timestep; zeros for other agents), and `action_mask` is 1 for those too.
+Taking one frees its holder where it stands; the holder acts next, in the same
+timestep.
+
 ## State
 
 `state()` is the global state, `float32 [3M + 7N]` in `state_space = Box(0, inf)`: the
@@ -366,7 +373,9 @@ class raw_env(AECEnv):
         self.possible_agents = [f"robot_{i}" for i in range(m)]
         self._index = {name: i for i, name in enumerate(self.possible_agents)}
         # One space object per kind: every agent's spaces are identical.
-        self.observation_spaces = dict.fromkeys(self.possible_agents, agent_space(self.obs_layout))
+        self.observation_spaces = dict.fromkeys(
+            self.possible_agents, agent_space(self.obs_layout, self.sim.config.reassign)
+        )
         self.action_spaces = dict.fromkeys(self.possible_agents, spaces.Discrete(n))
         self.state_space = state_space(self.obs_layout)
         self.np_random, self.np_random_seed = seeding.np_random()

@@ -35,10 +35,14 @@ def features_space(layout: ObservationLayout) -> spaces.Dict | spaces.Box:
     )
 
 
-def agent_space(layout: ObservationLayout) -> spaces.Dict:
-    """One agent's observation space: ``{"observation": ..., "action_mask": int8 [N]}``."""
+def agent_space(layout: ObservationLayout, reassign: bool = False) -> spaces.Dict:
+    """One agent's observation space: ``{"observation": ..., "action_mask": int8 [N]}``,
+    and ``"reassignable": int8 [N]`` with LoRR's reassignment (``sim.reassign``)."""
     mask = spaces.Box(0, 1, (layout.queue_len,), np.int8)
-    return spaces.Dict({"observation": features_space(layout), "action_mask": mask})
+    entries = {"observation": features_space(layout), "action_mask": mask}
+    if reassign:
+        entries["reassignable"] = spaces.Box(0, 1, (layout.queue_len,), np.int8)
+    return spaces.Dict(entries)
 
 
 def state_space(layout: ObservationLayout) -> spaces.Box:
