@@ -44,6 +44,14 @@ class SimConfig:
             pickup, and a free robot may take a held task (the holder is then free
             where it stands, at once); a task changes hands at most once per timestep.
             Rules that do not use it choose among the unassigned tasks as before.
+        decision_budget: Most decisions per timestep (``navigator=pibt``); the free
+            robots not served by then wait for the next timestep, as LoRR's clock
+            defers them (counted as ``deferred`` in the executor's stats). The
+            deterministic budget, for training and tests; ``None``: no limit.
+        time_budget_ms: Wall-clock milliseconds the policy may spend per timestep
+            (``navigator=pibt``), measured between each decision's start and its
+            action; past it the free robots wait as above. For judging (LoRR gives the
+            scheduler half of ``planTimeLimit``: 500); not reproducible run to run.
         noise_mean: Mean of the Gaussian noise added to completion times (seconds),
             at least 0: a delay on top of the travel time (single draws below 0 end a
             task no earlier than its decision).
@@ -61,6 +69,8 @@ class SimConfig:
     horizon: int | None = None
     refill: str = "assign"
     reassign: bool = False
+    decision_budget: int | None = None
+    time_budget_ms: float | None = None
     noise_mean: float = 0.25
     noise_var: float = 0.25
     reward: str = "ttd"
@@ -95,6 +105,10 @@ class SimConfig:
                 "sim.reassign=true needs sim.refill=finish (LoRR's reveal window: a held "
                 "task keeps its slot until it is picked up)"
             )
+        if self.decision_budget is not None:
+            at_least(self, "sim.", 1, "decision_budget")
+        if self.time_budget_ms is not None:
+            check_number("sim.time_budget_ms", self.time_budget_ms, minimum=0)
         if self.reward not in REWARDS:
             raise ConfigError(
                 f"sim.reward must be one of {', '.join(REWARDS)}, got {self.reward!r}"

@@ -33,6 +33,7 @@ done. :meth:`WarehouseSim.schedule` returns the executed episode.
 
 from __future__ import annotations
 
+import time
 import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -162,6 +163,14 @@ class WarehouseSim:
         self._executor = InstantTravel() if executor is None else executor
         self._executor.bind(config, layout, distance_model)
         self._reassign = config.reassign
+        self._decision_budget = config.decision_budget
+        self._time_budget = None if config.time_budget_ms is None else config.time_budget_ms / 1e3
+        budgeted = self._decision_budget is not None or self._time_budget is not None
+        if budgeted and not self._executor.releases:
+            raise ConfigError(
+                "sim.decision_budget and sim.time_budget_ms need an executor that moves "
+                f"robots timestep by timestep (navigator=pibt), not {self._executor.name!r}"
+            )
         if self._reassign and not self._executor.releases:
             raise ConfigError(
                 f"sim.reassign=true needs an executor that moves robots timestep by "
@@ -225,6 +234,8 @@ class WarehouseSim:
         self.done = False
         self.truncated = False
         self.last_ttd = 0.0
+        # The per-timestep budget: its timestep, decisions taken and seconds spent there.
+        self._budget_at, self._budget_used, self._budget_spent = -1.0, 0, 0.0
         self._select_next_robot(0.0)
 
     def _draw(
@@ -349,6 +360,7 @@ class WarehouseSim:
             self._take_held(slot)
 
         robot, now = self.robot, self.time
+        self._charge(now)
         task = int(self.queue_ids[slot])
         dist = self._dist if self._dist is not None else self.robot_distances()
         ttd = float(dist[slot])
@@ -485,7 +497,25 @@ class WarehouseSim:
         self.queue_rows[slot] = row
         self.queue_length[slot] = length
 
+    def _charge(self, now: float) -> None:
+        """Count a decision (and the policy's time on it) against ``now``'s budget."""
+        if self._budget_at != now:
+            self._budget_at, self._budget_used, self._budget_spent = now, 0, 0.0
+        self._budget_used += 1
+        if self._time_budget is not None:
+            self._budget_spent += time.perf_counter() - self._asked_at
+
+    def _spent(self, now: float) -> bool:
+        """Whether the policy's budget for timestep ``now`` is used up."""
+        if self._budget_at != now:
+            return False
+        if self._decision_budget is not None and self._budget_used >= self._decision_budget:
+            return True
+        return self._time_budget is not None and self._budget_spent >= self._time_budget
+
     def _select_next_robot(self, now: float) -> None:
+        if self._spent(now):
+            self._executor.defer()  # the free robots wait for the next timestep
         self.robot, self.time = self._executor.next_robot(now)
         self._dist = None
         if self._horizon is not None and self.time >= self._horizon:
@@ -501,6 +531,7 @@ class WarehouseSim:
             empty = np.flatnonzero(~self.queue_mask & (self.queue_holder < 0))
             if len(empty):
                 self._refill(int(empty[0]), -1, self.time)
+        self._asked_at = time.perf_counter()
 
     @property
     def navigator(self) -> DistanceModel:

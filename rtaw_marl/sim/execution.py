@@ -183,7 +183,8 @@ class Executor(ABC):
             ConfigError: Robots move independently: there is no schedule.
         """
 
-    #: Whether :meth:`release` and :meth:`started` exist (``sim.reassign`` needs them).
+    #: Whether :meth:`release`, :meth:`started` and :meth:`defer` exist (``sim.reassign``
+    #: and the per-timestep budgets need them).
     releases: bool = False
 
     def release(self, robot: int, now: float) -> np.ndarray:
@@ -207,6 +208,15 @@ class Executor(ABC):
         """
         del tasks
         raise ConfigError(f"the {self.name!r} executor does not report pickups as they happen")
+
+    def defer(self) -> None:
+        """The robots free now wait for the next timestep (the policy's budget for this
+        one is spent; ``sim.decision_budget``, ``sim.time_budget_ms``).
+
+        Raises:
+            ConfigError: This executor has no timesteps to defer to (:attr:`releases`).
+        """
+        raise ConfigError(f"the {self.name!r} executor has no timesteps to defer robots to")
 
     def stats(self) -> dict[str, float]:
         """Counters of the episode (none by default)."""

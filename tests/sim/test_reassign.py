@@ -14,12 +14,12 @@ from rtaw_marl.sim.core import WarehouseSim
 pytestmark = pytest.mark.integration
 
 
-def _sim(navigator: object = "pibt", **sim: object) -> WarehouseSim:
+def _sim(navigator: object = "pibt", horizon: int = 120, **sim: object) -> WarehouseSim:
     from rtaw_marl.scenarios.lorr import lorr_scenario
     from rtaw_marl.sim.builder import build_sim
 
     scenario = lorr_scenario(
-        "builtin:random_32_32_20_100.json", horizon=120, navigator=navigator, **sim
+        "builtin:random_32_32_20_100.json", horizon=horizon, navigator=navigator, **sim
     )
     return build_sim(scenario.spec())
 
@@ -105,3 +105,50 @@ def test_rules_that_ignore_reassignment_never_take_held_tasks() -> None:
         sim.step(slot)
     assert held_seen
     assert "reassigned" not in sim.executor.stats()
+
+
+def test_decision_budget_defers_robots_to_the_next_timestep() -> None:
+    """With at most 2 decisions a timestep, never more than 2 decisions share a time,
+    the robots left over wait (counted as deferred), and the episode repeats."""
+    from rtaw_marl.policies import make_baseline
+
+    runs = []
+    for _ in range(2):
+        sim = _sim(decision_budget=2)
+        policy = make_baseline("mpdm")
+        sim.reset(4)
+        policy.reset(4)
+        times = []
+        while not sim.done:
+            times.append(sim.time)
+            sim.step(policy.act_sim(sim))
+        _, per_time = np.unique(times, return_counts=True)
+        assert per_time.max() == 2
+        runs.append((sim.metrics().tasks_finished, sim.executor.stats()["deferred"]))
+    assert runs[0] == runs[1]
+    assert runs[0][1] >= 98  # t = 0: 100 robots free, 2 served
+    free = _sim()
+    free.reset(4)
+    assert "deferred" not in free.executor.stats()
+
+
+def test_time_budget_defers_when_the_policy_is_slow() -> None:
+    """A policy slower than the wall-clock budget serves one robot a timestep."""
+    import time
+
+    sim = _sim(time_budget_ms=1.0, horizon=5)
+    sim.reset(0)
+    times = []
+    while not sim.done:
+        times.append(sim.time)
+        time.sleep(0.002)
+        sim.step(int(np.flatnonzero(sim.queue_mask)[0]))
+    assert len(times) == len(set(times))
+    assert sim.executor.stats()["deferred"] > 0
+
+
+def test_budgets_need_timesteps() -> None:
+    with pytest.raises(ConfigError, match="decision_budget"):
+        _sim(navigator="astar", decision_budget=3)
+    with pytest.raises(ConfigError, match="decision_budget"):
+        SimConfig(decision_budget=0)

@@ -201,6 +201,8 @@ class PIBTExecutor(Executor):
         self.action = np.full(m, WAIT, dtype=np.int64)
         self.turn_actions = 0
         self.released = 0
+        self.deferred = 0
+        self.deferred_robots: list[int] = []
         self._guide_reset(m)
         self.free = [int(r) for r in np.flatnonzero(records.robot_free_at <= 0)]
         heapq.heapify(self.free)
@@ -243,6 +245,11 @@ class PIBTExecutor(Executor):
         heapq.heappush(self.free, robot)
         return self.cells[self.pos[robot]].astype(np.int64)
 
+    def defer(self) -> None:
+        self.deferred += len(self.free)
+        self.deferred_robots.extend(self.free)
+        self.free = []
+
     def started(self, tasks: np.ndarray) -> np.ndarray:
         return self.pickup_at[np.asarray(tasks, dtype=np.int64)] >= 0
 
@@ -260,6 +267,10 @@ class PIBTExecutor(Executor):
             if self.horizon is not None and self.t >= self.horizon:
                 return 0, float(self.t)  # the simulator ends the episode at T
             events = self._step()
+            if self.deferred_robots:  # their timestep's budget was spent: asked now
+                self.free.extend(self.deferred_robots)
+                heapq.heapify(self.free)
+                self.deferred_robots = []
             quiet = 0 if events else quiet + 1
             if quiet > self.stall_limit:
                 raise PlanningError(
@@ -484,4 +495,6 @@ class PIBTExecutor(Executor):
             out["guide_paths"] = float(self.guide_paths)
         if self.released:
             out["reassigned"] = float(self.released)
+        if self.deferred:
+            out["deferred"] = float(self.deferred)
         return out
