@@ -42,12 +42,14 @@ from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.integrations.lorr.config import LORR_DEFAULT, LoRRConfig
 from rtaw_marl.integrations.lorr.entry import RunSpec
 from rtaw_marl.integrations.lorr.kit import build_kit
+from rtaw_marl.integrations.lorr.planner import PlannerSpec
 from rtaw_marl.integrations.lorr.results import describe, finished_runs, write_results
 from rtaw_marl.integrations.lorr.run import RUN_FILES, LoRRRun, run_lifelong
 from rtaw_marl.policies import BASELINES
 from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.policies.user import import_policy, is_import_spec
 from rtaw_marl.sim.lorr import LoRRProblem, read_problem
+from rtaw_marl.sim.options import PIBTConfig
 from rtaw_marl.utils.runs import claim_file, claim_folder
 from rtaw_marl.utils.signals import Interrupted
 
@@ -65,7 +67,7 @@ def run(cfg: DictConfig | LoRRConfig) -> dict[str, LoRRRun]:
     """
     cfg = typed(cfg)
     if cfg.build_only:
-        for variant in ("python", "default"):
+        for variant in ("python", "planner", "default"):
             build_kit(variant, cfg.kit, cfg.cache)
         return {}
     if cfg.problem is None:
@@ -95,9 +97,14 @@ def run(cfg: DictConfig | LoRRConfig) -> dict[str, LoRRRun]:
 
 
 def _run_one(
-    cfg: LoRRConfig, problem: LoRRProblem, folder: Path, label: str, spec: RunSpec | None
+    cfg: LoRRConfig,
+    problem: LoRRProblem,
+    folder: Path,
+    label: str,
+    spec: RunSpec | PlannerSpec | None,
 ) -> LoRRRun:
-    build = build_kit("default" if spec is None else "python", cfg.kit, cfg.cache)
+    variant = "planner" if isinstance(spec, PlannerSpec) else "python"
+    build = build_kit("default" if spec is None else variant, cfg.kit, cfg.cache)
     print(f"{label}: lifelong, {cfg.timesteps} timesteps at {cfg.plan_time_ms} ms ...")
     return run_lifelong(
         build, problem.path, folder / _folder_name(label), spec, label, cfg.timesteps,
@@ -158,11 +165,24 @@ def _stopped(
     )
 
 
-def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | None]:
-    """Label -> run spec (``None``: the kit's own scheduler), checked before any run."""
+def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | PlannerSpec | None]:
+    """Label -> run spec (``None``: the kit's own scheduler and planner), checked before
+    any run."""
     names = policy_names(as_list(cfg.policy))
     if not names:
         raise ConfigError("policy must name at least one scheduler")
+    if cfg.planner == "pibt":
+        if names != [LORR_DEFAULT]:
+            raise ConfigError(
+                "planner=pibt runs under the kit's default scheduler (LoRR's planner "
+                f"track): give policy={LORR_DEFAULT}, got policy={','.join(names)}"
+            )
+        nav = PIBTConfig()
+        spec = PlannerSpec(
+            problem=problem, stats="stats.json", timesteps=int(cfg.timesteps),
+            patience=nav.patience, guidance=nav.guidance,
+        )  # fmt: skip
+        return {f"{LORR_DEFAULT}+pibt": spec}
     sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}
     for option, given in sources.items():
         if option in names and not given:

@@ -112,6 +112,38 @@ def test_own_simulator_predicts_the_official_count(official: dict[str, LoRRRun])
 
 
 @needs_kit
+def test_pair_greedy_reassigns_inside_lifelong(build: KitBuild, tmp_path: Path) -> None:
+    """The winner's scheduler in LoRR's simulator: LoRR accepts every schedule, including
+    the ones that move tasks not started to other robots."""
+    run = run_lifelong(
+        build, RANDOM, tmp_path / "pg", _spec("pair_greedy"), "pair_greedy", STEPS, PLAN_MS
+    )
+    assert run.schedule_errors == 0
+    assert run.planner_errors == 0
+    assert run.scheduler["reassigned"] > 0
+    assert run.tasks_finished > 200
+
+
+@needs_kit
+def test_own_executor_plans_inside_lifelong(tmp_path: Path) -> None:
+    """The own PIBT executor as LoRR's planner (planner track, the kit's scheduler): no
+    invalid moves, and LoRR's robots end every timestep where the executor predicted
+    (the two action models agree: no mismatch)."""
+    from rtaw_marl.integrations.lorr.planner import PlannerSpec
+
+    spec = PlannerSpec(
+        problem=str(RANDOM), stats="stats.json", timesteps=STEPS, patience=16, guidance=1.0
+    )
+    run = run_lifelong(build_kit("planner"), RANDOM, tmp_path / "p", spec, "pibt", STEPS, PLAN_MS)
+    assert run.planner_errors == 0
+    assert run.schedule_errors == 0
+    assert run.scheduler["errors"] == []
+    assert run.scheduler["mismatches"] == 0
+    assert run.scheduler["timesteps"] == STEPS
+    assert run.tasks_finished > 200
+
+
+@needs_kit
 def test_own_episode_round_trips_through_lorr_format(tmp_path: Path) -> None:
     """An own PIBT episode written in LoRR's format replays to the same cells at every
     timestep and the same tasks finished."""
@@ -156,6 +188,8 @@ def test_rtaw_lorr_cli(build: KitBuild, tmp_path: Path) -> None:
         ("policy=hindsight", "hindsight needs the episode's future"),
         ("policy=mpdmm", "unknown policy"),
         ("policy=pretrained", "needs pretrained="),
+        ("planner=astar", "planner must be one of default, pibt"),
+        ("planner=pibt", "planner=pibt runs under the kit's default scheduler"),
     ]:
         args = [f"problem={RANDOM}", bad] if not bad.startswith("problem") else [bad]
         done = subprocess.run(

@@ -9,10 +9,14 @@ from rtaw_marl.errors import ConfigError
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.utils.checks import at_least, check_fields
 
-__all__ = ["LORR_DEFAULT", "LoRRConfig"]
+__all__ = ["LORR_DEFAULT", "PLANNERS", "LoRRConfig"]
 
 #: ``policy=lorr_default``: the start kit's own scheduler (its C++ entry).
 LORR_DEFAULT = "lorr_default"
+
+#: ``planner=...``: the kit's default planner, or the own executor (``navigator=pibt``'s
+#: defaults: LoRR's action model and traffic-flow guidance) under the kit's scheduler.
+PLANNERS = ("default", "pibt")
 
 #: The largest value ``lifelong`` takes for a count or a time limit (a C++ ``int``).
 _INT_MAX = 2**31 - 1
@@ -37,6 +41,9 @@ class LoRRConfig:
             together; its default planner uses all of it, so a run takes about
             ``timesteps x plan_time_ms``.
         preprocess_time_ms: LoRR's ``preprocessTimeLimit``.
+        planner: ``default`` (the kit's planner) or ``pibt``: the own executor as LoRR's
+            planner, with ``navigator=pibt``'s defaults, under the kit's default
+            scheduler (LoRR's planner track; ``policy`` must be ``lorr_default``).
         share: The part of ``plan_time_ms`` the scheduler may use (the kit's default
             scheduler takes half); robots not served in it wait for the next timestep.
         output: Where ``results.json`` goes; ``None``: the run folder.
@@ -58,6 +65,7 @@ class LoRRConfig:
     plan_time_ms: int = 1000
     preprocess_time_ms: int = 30000
     share: float = 0.5
+    planner: str = "default"
     output: str | None = None
     kit: str | None = None
     cache: str | None = None
@@ -77,5 +85,7 @@ class LoRRConfig:
                 )
         if self.candidates is not None:
             at_least(self, "", 1, "candidates")
+        if self.planner not in PLANNERS:
+            raise ConfigError(f"planner must be one of {', '.join(PLANNERS)}, got {self.planner!r}")
         if not 0 < float(self.share) <= 1:
             raise ConfigError(f"share must be in (0, 1], got {self.share}")

@@ -1,13 +1,14 @@
 """LoRR's 2024 start kit, built once per machine into a cache folder.
 
-Two builds of the same sources (v2.1.2, MIT, ``../shared/lorr/start-kit-v2.1.2`` beside
-the project or ``RTAW_LORR_KIT``): ``python``, the scheduler track with Python (the
-kit's default planner; ``pyTaskScheduler.py`` schedules), which serves rtaw_marl
-policies, and ``default``, the kit's own C++ entry (its default scheduler and planner),
-LoRR's reference. A build lives in ``~/.cache/rtaw_marl/lorr/<variant>-<hash>``
-(``RTAW_LORR_CACHE``), keyed by the kit's sources, the Python and pybind11: made under a
-file lock in a temporary folder, then renamed, so concurrent callers (test workers)
-build it once and never see half a build.
+Three builds of the same sources (v2.1.2, MIT, ``../shared/lorr/start-kit-v2.1.2``
+beside the project or ``RTAW_LORR_KIT``): ``python``, the scheduler track with Python
+(the kit's default planner; ``pyTaskScheduler.py`` schedules), which serves rtaw_marl
+policies; ``planner``, the planner track with Python (the kit's default scheduler;
+``pyMAPFPlanner.py`` plans), which serves the own executor; and ``default``, the kit's
+own C++ entry (its default scheduler and planner), LoRR's reference. A build lives in
+``~/.cache/rtaw_marl/lorr/<variant>-<hash>`` (``RTAW_LORR_CACHE``), keyed by the kit's
+sources, the Python and pybind11: made under a file lock in a temporary folder, then
+renamed, so concurrent callers (test workers) build it once and never see half a build.
 
 What it needs: cmake, a C++17 compiler, make, Boost (program_options, system,
 filesystem, log) and pybind11 (``pip install 'rtaw_marl[lorr]'``). The library installs
@@ -34,7 +35,9 @@ from rtaw_marl.errors import ConfigError
 __all__ = ["KIT_VERSION", "KitBuild", "StartKitError", "build_kit", "kit_source", "set_track"]
 
 KIT_VERSION = "2.1.2"
-VARIANTS = ("python", "default")
+VARIANTS = ("python", "default", "planner")
+#: The Python track of each Python build (``python/set_track.bash``'s argument).
+_PYTHON_TRACK = {"python": "scheduler", "planner": "planner"}
 #: What the build needs from the system: a file that shows it, and its Debian package.
 _SYSTEM = (
     ("cmake", "cmake"),
@@ -58,7 +61,7 @@ class KitBuild:
     """A finished build.
 
     Attributes:
-        variant: ``python`` or ``default``.
+        variant: ``python``, ``planner`` or ``default``.
         root: Its folder (the kit's sources and ``build/``).
     """
 
@@ -72,7 +75,7 @@ class KitBuild:
 
     @property
     def module_dir(self) -> Path:
-        """Where the ``MAPF`` Python module of the ``python`` build is."""
+        """Where the ``MAPF`` Python module of a Python build is."""
         return self.root / "build"
 
 
@@ -119,7 +122,7 @@ def build_kit(
     if variant not in VARIANTS:
         raise StartKitError(f"unknown start kit build {variant!r}; valid: {', '.join(VARIANTS)}")
     src = kit_source(source)
-    pybind_dir = _pybind11_dir() if variant == "python" else None
+    pybind_dir = _pybind11_dir() if variant in _PYTHON_TRACK else None
     key = _build_key(src, variant, pybind_dir)
     root = cache_root(cache)
     build = KitBuild(variant, root / f"{variant}-{key}")
@@ -199,12 +202,12 @@ def _copy_sources(src: Path, dest: Path) -> None:
 def _compile(root: Path, variant: str, pybind_dir: str | None) -> None:
     log_file = root / "build.log"
     steps: list[tuple[str, list[str]]] = []
-    if variant == "python":
+    if variant in _PYTHON_TRACK:
         python = sys.executable
         # What the kit's python/set_track.bash does, in Python: the script expands its own
         # folder unquoted (rm -rf $PYTHON_PATH"/tmp"/*), so a cache path with a space
         # would delete what stands before the space.
-        set_track(root, "scheduler")
+        set_track(root, _PYTHON_TRACK[variant])
         steps.append(
             ("cmake", [
                 "cmake", "-B", "build", "./", "-DPYTHON=true", "-DCMAKE_BUILD_TYPE=Release",
@@ -287,7 +290,7 @@ def _locked(path: Path) -> Iterator[None]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``python -m rtaw_marl.integrations.lorr.kit``: build the ``python`` variant if the
+    """``python -m rtaw_marl.integrations.lorr.kit``: build the Python variants if the
     start kit is there (``make test`` runs this before the suite), else say so and pass.
     ``--missing`` prints the missing Debian packages, one line, for ``make lorr-kit``
     (none when there is no kit to build)."""
@@ -309,7 +312,8 @@ def main(argv: list[str] | None = None) -> None:
         print(f"skipped: {exc}; the LoRR start kit tests will skip", file=sys.stderr)
         return
     try:
-        build_kit("python")
+        for variant in ("python", "planner"):
+            build_kit(variant)
     except StartKitError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)

@@ -30,7 +30,10 @@ SIMULATOR = "lorr-start-kit-2.1.2"
 #: cache).
 SETTING_KEYS = (
     "timesteps", "plan_time_ms", "preprocess_time_ms", "share", "candidates", "baselines",
+    "planner",
 )  # fmt: skip
+#: A key results files written before it existed lack: its value then.
+_BEFORE = {"planner": "default"}
 
 
 def write_results(
@@ -76,9 +79,10 @@ def finished_runs(path: Path, cfg: LoRRConfig, problem: LoRRProblem) -> dict[str
         )
     now = dataclasses.asdict(cfg)
     for key in SETTING_KEYS:
-        if old_cfg.get(key) != now[key]:
+        old = old_cfg.get(key, _BEFORE.get(key))
+        if old != now[key]:
             raise ConfigError(
-                f"resume=true: {path} was run with {key}={old_cfg.get(key)!r}, this run has "
+                f"resume=true: {path} was run with {key}={old!r}, this run has "
                 f"{key}={now[key]!r}; resume with the same setting or give another output"
             )
     return kept

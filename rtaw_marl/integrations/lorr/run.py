@@ -25,14 +25,15 @@ from typing import Any
 
 from rtaw_marl.integrations.lorr.entry import SPEC_VARIABLE, RunSpec
 from rtaw_marl.integrations.lorr.kit import KitBuild, StartKitError
+from rtaw_marl.integrations.lorr.planner import PLANNER_SPEC_VARIABLE, PlannerSpec
 from rtaw_marl.sim.lorr import read_problem
 
 __all__ = ["RUN_FILES", "LoRRRun", "read_output", "run_lifelong"]
 
 #: What :func:`run_lifelong` and ``lifelong`` write in a run folder (and nothing else).
 RUN_FILES = frozenset(
-    {"spec.json", "pyTaskScheduler.py", "config.json", "output.json", "lifelong.log",
-     "stdout.txt", "stats.json", "__pycache__"}
+    {"spec.json", "pyTaskScheduler.py", "pyMAPFPlanner.py", "config.json", "output.json",
+     "lifelong.log", "stdout.txt", "stats.json", "__pycache__"}
 )  # fmt: skip
 
 #: The run folder's module, imported by ``lifelong``: the start kit's types, then ours.
@@ -42,6 +43,14 @@ import site
 site.addsitedir({site!r})
 import MAPF  # noqa: F401,E402  (registers the start kit's types before ours get them)
 from rtaw_marl.integrations.lorr.entry import pyTaskScheduler  # noqa: F401,E402
+'''
+#: The planner track's module: the own executor as LoRR's planner.
+_PLANNER_SHIM = '''"""Written by rtaw_marl: serves the own PIBT executor as LoRR's planner."""
+import site
+
+site.addsitedir({site!r})
+import MAPF  # noqa: F401,E402  (registers the start kit's types before ours get them)
+from rtaw_marl.integrations.lorr.planner import pyMAPFPlanner  # noqa: F401,E402
 '''
 
 
@@ -79,7 +88,7 @@ def run_lifelong(
     build: KitBuild,
     problem: str | Path,
     folder: Path,
-    spec: RunSpec | None,
+    spec: RunSpec | PlannerSpec | None,
     label: str,
     timesteps: int,
     plan_time_ms: int = 1000,
@@ -88,10 +97,12 @@ def run_lifelong(
     """Run ``lifelong`` on ``problem`` in ``folder`` (made here, must not exist).
 
     Args:
-        build: The ``python`` build with ``spec``, the ``default`` build without.
+        build: The ``python`` build with a :class:`RunSpec`, ``planner`` with a
+            :class:`PlannerSpec`, ``default`` without a spec.
         problem: The LoRR problem JSON.
         folder: The run folder.
-        spec: The policy to serve; ``None`` for the kit's own scheduler.
+        spec: The policy to serve as scheduler, the own executor to serve as planner, or
+            ``None`` for the kit's own scheduler and planner.
         label: The scheduler's name in results.
         timesteps: ``simulationTime``.
         plan_time_ms: ``planTimeLimit`` per timestep (scheduler and planner together).
@@ -102,17 +113,26 @@ def run_lifelong(
         TaskFileError: ``problem`` is not a LoRR problem.
     """
     problem = read_problem(problem).path.resolve()
-    if (spec is None) != (build.variant == "default"):
-        raise StartKitError("LoRR's own scheduler runs on the default build, a policy on python")
+    wanted = {type(None): "default", RunSpec: "python", PlannerSpec: "planner"}[type(spec)]
+    if build.variant != wanted:
+        raise StartKitError(
+            f"this run needs the start kit's {wanted} build, not {build.variant} (LoRR's own "
+            "scheduler and planner: default; a policy: python; the own planner: planner)"
+        )
     folder.mkdir(parents=True)
     env = dict(os.environ)
     if spec is not None:
         spec = dataclasses.replace(spec, problem=str(problem), stats=str(folder / "stats.json"))
         spec.write(folder / "spec.json")
         site = sysconfig.get_paths()["purelib"]
-        (folder / "pyTaskScheduler.py").write_text(_SHIM.format(site=site), encoding="utf-8")
+        module, shim, variable = (
+            ("pyMAPFPlanner.py", _PLANNER_SHIM, PLANNER_SPEC_VARIABLE)
+            if isinstance(spec, PlannerSpec)
+            else ("pyTaskScheduler.py", _SHIM, SPEC_VARIABLE)
+        )
+        (folder / module).write_text(shim.format(site=site), encoding="utf-8")
         (folder / "config.json").write_text(json.dumps({"python_path": str(folder)}))
-        env[SPEC_VARIABLE] = str(folder / "spec.json")
+        env[variable] = str(folder / "spec.json")
         env["PYTHONPATH"] = os.pathsep.join([str(build.module_dir), str(folder)])
         env.setdefault("PYTHONHOME", sys.base_prefix)
     output = folder / "output.json"
@@ -128,7 +148,8 @@ def run_lifelong(
     stats = _scheduler_stats(folder / "stats.json") if spec is not None else {}
     if stats.get("errors"):
         last = [ln for ln in str(stats["errors"][0]).splitlines() if ln.strip()][-1]
-        raise StartKitError(f"{label}: the scheduler failed inside lifelong: {last} ({folder})")
+        part = "planner" if isinstance(spec, PlannerSpec) else "scheduler"
+        raise StartKitError(f"{label}: the {part} failed inside lifelong: {last} ({folder})")
     if done.returncode != 0 or not output.is_file():
         raise StartKitError(
             f"{label}: lifelong exited {done.returncode}: {_last_line(folder)} ({folder})"

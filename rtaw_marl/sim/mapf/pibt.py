@@ -360,8 +360,29 @@ class PIBTExecutor(Executor):
 
     def _step(self) -> int:
         """One timestep for the whole fleet; returns how many goals were reached."""
-        m = self.num_robots
         busy = self.phase != _IDLE
+        self._move(busy)
+        self.t += 1
+        if self.record:
+            self.trace.append(self.pos.astype(np.int32))
+            if self.turns:
+                self.heading_trace.append(self.heading.astype(np.int8))
+        self.since[busy] += 1
+        self._progress(busy)
+        self.max_stall = max(self.max_stall, int(self.since.max(initial=0)))
+        arrived = np.flatnonzero(busy & (self.pos == self.goal))
+        for robot in arrived.tolist():
+            if self.phase[robot] == _TO_PICKUP:
+                self._picked_up(robot)
+            else:
+                self._delivered(robot)
+        if self.guidance > 0:
+            self._guide_update()
+        return len(arrived)
+
+    def _move(self, busy: np.ndarray) -> None:
+        """Plan and take one timestep's moves (``pos``, ``heading``, ``action``)."""
+        m = self.num_robots
         # Waiting longest first; idle robots last; ties: the lower id.
         prio = self.since.astype(np.float64)
         stuck = busy & (self.stuck >= self.patience)
@@ -388,23 +409,6 @@ class PIBTExecutor(Executor):
                 self.pos, order, self.goal_field, self.fields.store, self.nbr, tie,
                 self.occ_now, self.occ_next, self.nxt,
             )  # fmt: skip
-        self.t += 1
-        if self.record:
-            self.trace.append(self.pos.astype(np.int32))
-            if self.turns:
-                self.heading_trace.append(self.heading.astype(np.int8))
-        self.since[busy] += 1
-        self._progress(busy)
-        self.max_stall = max(self.max_stall, int(self.since.max(initial=0)))
-        arrived = np.flatnonzero(busy & (self.pos == self.goal))
-        for robot in arrived.tolist():
-            if self.phase[robot] == _TO_PICKUP:
-                self._picked_up(robot)
-            else:
-                self._delivered(robot)
-        if self.guidance > 0:
-            self._guide_update()
-        return len(arrived)
 
     def _guide_compact(self) -> None:
         """Keep only the cells still to walk, in a buffer sized by them (twice, and room
