@@ -180,7 +180,7 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | PlannerSpe
         nav = PIBTConfig()
         spec = PlannerSpec(
             problem=problem, stats="stats.json", timesteps=int(cfg.timesteps),
-            patience=nav.patience, guidance=nav.guidance,
+            patience=nav.patience, guidance=nav.guidance, guide_replans=nav.guide_replans,
         )  # fmt: skip
         return {f"{LORR_DEFAULT}+pibt": spec}
     sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}

@@ -132,7 +132,12 @@ def test_own_executor_plans_inside_lifelong(tmp_path: Path) -> None:
     from rtaw_marl.integrations.lorr.planner import PlannerSpec
 
     spec = PlannerSpec(
-        problem=str(RANDOM), stats="stats.json", timesteps=STEPS, patience=16, guidance=1.0
+        problem=str(RANDOM),
+        stats="stats.json",
+        timesteps=STEPS,
+        patience=16,
+        guidance=1.0,
+        guide_replans=0,
     )
     run = run_lifelong(build_kit("planner"), RANDOM, tmp_path / "p", spec, "pibt", STEPS, PLAN_MS)
     assert run.planner_errors == 0

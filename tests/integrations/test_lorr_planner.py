@@ -46,7 +46,7 @@ def test_planner_drives_lorrs_action_model_without_conflicts() -> None:
     loc = rng.choice(free, size=100, replace=False)
     heading = np.zeros(100, dtype=np.int64)
     goals = rng.choice(free, size=100)
-    planner = FleetPlanner(layout, 100, patience=8, guidance=1.0, seed=0)
+    planner = FleetPlanner(layout, 100, patience=8, guidance=1.0, guide_replans=0, seed=0)
     reached = 0
     for _ in range(200):
         actions = planner.plan(loc, heading, goals)
@@ -67,7 +67,7 @@ def test_planner_replans_robots_it_did_not_predict() -> None:
     layout = read_problem("builtin:random_32_32_20_100.json").layout()
     free = np.flatnonzero(~layout.obstacles.ravel())
     loc, heading = free[:10].copy(), np.zeros(10, dtype=np.int64)
-    planner = FleetPlanner(layout, 10, patience=8, guidance=0.0, seed=1)
+    planner = FleetPlanner(layout, 10, patience=8, guidance=0.0, guide_replans=0, seed=1)
     goals = free[-10:]
     actions = planner.plan(loc, heading, goals)
     assert (actions != 3).any()

@@ -50,6 +50,7 @@ class PlannerSpec:
         timesteps: LoRR's ``simulationTime``: the stats are written at the last one.
         patience: ``navigator.patience``.
         guidance: ``navigator.guidance``.
+        guide_replans: ``navigator.guide_replans``.
         seed: The planner's tie-breaking seed.
     """
 
@@ -58,6 +59,7 @@ class PlannerSpec:
     timesteps: int
     patience: int
     guidance: float
+    guide_replans: int
     seed: int = 0
 
     def write(self, path: Path) -> None:
@@ -75,16 +77,25 @@ class FleetPlanner(PIBTExecutor):
         layout: The problem's map.
         num_robots: LoRR's team size.
         patience: Timesteps before a robot not getting nearer its goal is stuck.
-        guidance: The guide paths' contraflow weight (``0``: none).
+        guidance: The guide paths' congestion weight (``0``: none).
+        guide_replans: Guide paths re-planned per timestep besides the needed ones.
         seed: Seeds the tie-breaks and priority rotation.
     """
 
     def __init__(
-        self, layout: Layout, num_robots: int, *, patience: int, guidance: float, seed: int = 0
+        self,
+        layout: Layout,
+        num_robots: int,
+        *,
+        patience: int,
+        guidance: float,
+        guide_replans: int,
+        seed: int = 0,
     ) -> None:
         super().__init__(
-            stall_limit=1 << 30, patience=patience, record=False, turns=True, guidance=guidance
-        )
+            stall_limit=1 << 30, patience=patience, record=False, turns=True,
+            guidance=guidance, guide_replans=guide_replans,
+        )  # fmt: skip
         settings = SimConfig(num_robots=num_robots, noise_mean=0.0, noise_var=0.0)
         self.bind(settings, layout, GridDistance(layout))
         self.width = layout.width
@@ -179,7 +190,8 @@ class pyMAPFPlanner:
                 raise ValueError(f"LoRR's map is not the map of {self.spec.problem}")
             self.planner = FleetPlanner(
                 layout, int(self.env.num_of_agents), patience=self.spec.patience,
-                guidance=self.spec.guidance, seed=self.spec.seed,
+                guidance=self.spec.guidance, guide_replans=self.spec.guide_replans,
+                seed=self.spec.seed,
             )  # fmt: skip
         except BaseException:
             self._fail()

@@ -27,7 +27,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["GUIDE_TIE", "guide_advance", "guide_compact", "guide_plan", "guide_ties"]
+__all__ = [
+    "GUIDE_TIE",
+    "guide_advance",
+    "guide_compact",
+    "guide_drop",
+    "guide_plan",
+    "guide_ties",
+]
 
 #: The tie-break given to the guide path's next cell. PIBT's key is the BFS distance plus
 #: half the tie-break, so the next guide cell gains 2.5 over any other: more than the
@@ -58,6 +65,13 @@ def _drop_rest(r, buf, start, length, at, flow, nbr) -> None:
     start[r] = -1
     length[r] = 0
     at[r] = 0
+
+
+@njit(cache=True, nogil=True)
+def guide_drop(robots, buf, start, length, at, flow, nbr) -> None:
+    """Forget the guide paths of ``robots int64 [K]`` (their edges leave the flow)."""
+    for i in range(robots.shape[0]):
+        _drop_rest(robots[i], buf, start, length, at, flow, nbr)
 
 
 @njit(cache=True, nogil=True)
@@ -177,7 +191,11 @@ def guide_plan(
                 v = nbr[u, k]
                 if v < 0 or fields[row, v] < 0:
                     continue
-                g = cost[u] + 1.0 + weight * flow[v, _REVERSE[k]]
+                # LoRR kit's costs (search.cpp): contraflow times the flow this way
+                # (plus one), and half the paths through the next cell.
+                load = flow[v, 0] + flow[v, 1] + flow[v, 2] + flow[v, 3]
+                jam = (flow[u, k] + 1) * flow[v, _REVERSE[k]] + load // 2
+                g = cost[u] + 1.0 + weight * jam
                 if stamp[v] != mark or g < cost[v] - 1e-9:
                     stamp[v] = mark
                     cost[v] = g

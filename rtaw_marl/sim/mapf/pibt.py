@@ -45,7 +45,13 @@ from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError
 from rtaw_marl.sim.distances import DistanceModel, GridDistance
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.mapf._guidance import guide_advance, guide_compact, guide_plan, guide_ties
+from rtaw_marl.sim.mapf._guidance import (
+    guide_advance,
+    guide_compact,
+    guide_drop,
+    guide_plan,
+    guide_ties,
+)
 from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
 from rtaw_marl.sim.mapf._turns import FORWARD, WAIT, turn_step
 from rtaw_marl.sim.mapf.schedule import Schedule
@@ -128,8 +134,10 @@ class PIBTExecutor(Executor):
             facing east, move forward only, and a quarter turn takes a timestep.
             ``False``: they move to any neighbouring cell without turning.
         guidance: Traffic-flow guidance (:mod:`~rtaw_marl.sim.mapf._guidance`): the
-            cost of one other robot's guide path using an edge the other way; ``0``:
-            none (robots follow shortest paths).
+            weight of congestion (contraflow and cell load) in the guide paths' edge
+            costs; ``0``: none (robots follow shortest paths).
+        guide_replans: Guide paths re-planned per timestep on the current flows, the
+            longest unchanged first (besides those that must be).
     """
 
     name = "pibt"
@@ -137,6 +145,7 @@ class PIBTExecutor(Executor):
 
     def __init__(
         self, *, stall_limit: int, patience: int, record: bool, turns: bool, guidance: float,
+        guide_replans: int,
     ) -> None:  # fmt: skip
         for key, value in (("stall_limit", stall_limit), ("patience", patience)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -148,6 +157,7 @@ class PIBTExecutor(Executor):
         self.record = bool(record)
         self.turns = turns
         self.guidance = float(guidance)
+        self.guide_replans = int(guide_replans)
         self._bound = False
 
     @property
@@ -430,6 +440,7 @@ class PIBTExecutor(Executor):
             "at": np.zeros(m, dtype=np.int64),
             "flow": np.zeros((c, 4), dtype=np.int32),
             "need": np.zeros(m, dtype=bool),
+            "planned_at": np.zeros(m, dtype=np.int64),
             "cost": np.zeros(c), "parent": np.zeros(c, dtype=np.int64),
             "stamp": np.full(c, -1, dtype=np.int64), "heap_key": np.empty(4 * c),
             "heap_node": np.empty(4 * c, dtype=np.int64),
@@ -439,13 +450,23 @@ class PIBTExecutor(Executor):
         self.guide_paths = 0
 
     def _guide_update(self) -> None:
-        """Advance every robot along its guide path; plan new ones where needed."""
+        """Advance every robot along its guide path; plan new ones where needed, and
+        re-plan ``guide_replans`` more, the longest unchanged first."""
         g = self.guide
         guide_advance(
             self.pos, self.goal, g["buf"], g["start"], g["length"], g["at"], g["flow"],
             self.nbr, g["need"],
         )  # fmt: skip
         robots = np.flatnonzero(g["need"]).astype(np.int64)
+        g["planned_at"][robots] = self.t
+        if self.guide_replans:
+            kept = np.flatnonzero((g["start"] >= 0) & ~g["need"])
+            if len(kept):
+                n = min(self.guide_replans, len(kept))
+                old = kept[np.argsort(g["planned_at"][kept], kind="stable")[:n]]
+                guide_drop(old, g["buf"], g["start"], g["length"], g["at"], g["flow"], self.nbr)
+                g["planned_at"][old] = self.t
+                robots = np.concatenate([robots, old])
         if not len(robots):
             return
         done = 0

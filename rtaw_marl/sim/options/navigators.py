@@ -160,6 +160,10 @@ class PIBTConfig(NavigatorOption):
             the edge the other way (contraflow); ``0``: none, shortest paths. With
             ``turns``, the defaults are LoRR's planner: within 5% of LoRR's own counts
             on its random map (docs/lorr.md).
+        guide_replans: Guide paths re-planned per timestep besides the ones that must
+            be (new goal, robot pushed off its path), oldest first, on the flows as
+            they are now: LoRR's planner re-optimises its guide paths this way until
+            its deadline. A count, so episodes stay deterministic; ``0``: none.
     """
 
     name: str = "pibt"
@@ -172,6 +176,7 @@ class PIBTConfig(NavigatorOption):
     cache_mb: float = 1024.0
     turns: bool = True
     guidance: float = 1.0
+    guide_replans: int = 0
 
     def __post_init__(self) -> None:
         g = self.guidance
@@ -180,6 +185,9 @@ class PIBTConfig(NavigatorOption):
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
         _check_positive("navigator.patience", self.patience, "integer", int)
         _check_positive("navigator.cache_mb", self.cache_mb, "number", float)
+        r = self.guide_replans
+        if isinstance(r, bool) or not isinstance(r, int) or r < 0:
+            raise ConfigError(f"navigator.guide_replans must be an integer >= 0, got {r!r}")
         super().__post_init__()
 
     def distance_model(self, layout: Layout) -> DistanceModel:
@@ -188,7 +196,7 @@ class PIBTConfig(NavigatorOption):
     def executor(self) -> Executor:
         return PIBTExecutor(
             stall_limit=self.stall_limit, patience=self.patience, record=self.record,
-            turns=self.turns, guidance=float(self.guidance),
+            turns=self.turns, guidance=float(self.guidance), guide_replans=self.guide_replans,
         )  # fmt: skip
 
 
