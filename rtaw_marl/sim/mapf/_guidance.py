@@ -191,11 +191,7 @@ def guide_plan(
                 v = nbr[u, k]
                 if v < 0 or fields[row, v] < 0:
                     continue
-                # LoRR kit's costs (search.cpp): contraflow times the flow this way
-                # (plus one), and half the paths through the next cell.
-                load = flow[v, 0] + flow[v, 1] + flow[v, 2] + flow[v, 3]
-                jam = (flow[u, k] + 1) * flow[v, _REVERSE[k]] + load // 2
-                g = cost[u] + 1.0 + weight * jam
+                g = cost[u] + 1.0 + weight * flow[v, _REVERSE[k]]
                 if stamp[v] != mark or g < cost[v] - 1e-9:
                     stamp[v] = mark
                     cost[v] = g

@@ -134,8 +134,8 @@ class PIBTExecutor(Executor):
             facing east, move forward only, and a quarter turn takes a timestep.
             ``False``: they move to any neighbouring cell without turning.
         guidance: Traffic-flow guidance (:mod:`~rtaw_marl.sim.mapf._guidance`): the
-            weight of congestion (contraflow and cell load) in the guide paths' edge
-            costs; ``0``: none (robots follow shortest paths).
+            cost of one other robot's guide path using an edge the other way; ``0``:
+            none (robots follow shortest paths).
         guide_replans: Guide paths re-planned per timestep on the current flows, the
             longest unchanged first (besides those that must be).
     """
