@@ -178,6 +178,9 @@ class WarehouseSim:
             )
         self.done = True
         self.truncated = False
+        # The per-timestep budget: its timestep, decisions taken and seconds spent there.
+        self._budget_at, self._budget_used, self._budget_spent = -1.0, 0, 0.0
+        self._asked_at = 0.0
 
     # ------------------------------------------------------------------ reset
     def reset(self, seed: int | None = None) -> None:

@@ -202,6 +202,7 @@ def test_registry_and_parameters() -> None:
         "lookahead",
         "hungarian",
         "batch",
+        "pair_greedy",
         "hindsight",
     }
     params = BaselinesConfig(lookahead_horizon=5, hindsight_horizon=7)
