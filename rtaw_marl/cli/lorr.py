@@ -254,7 +254,10 @@ def _line(result: LoRRRun, runs: dict[str, LoRRRun]) -> str:
         vs = f", {gain:+.1f}% vs {LORR_DEFAULT}"
     sched = result.scheduler
     extra = ""
-    if sched:
+    if "mismatches" in sched:  # the own executor as planner (planner=pibt)
+        ms = 1000.0 * float(sched.get("seconds", 0.0)) / max(1, int(sched.get("timesteps", 1)))
+        extra = f", {sched['mismatches']} mismatches, planner {ms:.1f} ms/timestep"
+    elif sched:
         ms = 1000.0 * float(sched.get("seconds", 0.0)) / max(1, int(sched.get("calls", 1)))
         extra = f", {sched.get('deferred', 0)} deferred, scheduler {ms:.1f} ms/timestep"
     return (

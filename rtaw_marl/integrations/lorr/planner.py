@@ -188,11 +188,20 @@ class pyMAPFPlanner:
             grid = np.asarray(list(self.env.map), dtype=bool).reshape(self.env.rows, self.env.cols)
             if grid.shape != layout.obstacles.shape or not np.array_equal(grid, layout.obstacles):
                 raise ValueError(f"LoRR's map is not the map of {self.spec.problem}")
-            self.planner = FleetPlanner(
-                layout, int(self.env.num_of_agents), patience=self.spec.patience,
-                guidance=self.spec.guidance, guide_replans=self.spec.guide_replans,
-                seed=self.spec.seed,
-            )  # fmt: skip
+
+            def planner() -> FleetPlanner:
+                return FleetPlanner(
+                    layout, int(self.env.num_of_agents), patience=self.spec.patience,
+                    guidance=self.spec.guidance, guide_replans=self.spec.guide_replans,
+                    seed=self.spec.seed,
+                )  # fmt: skip
+
+            # One timestep planned and thrown away compiles the kernels here, in the
+            # preprocessing time, not in LoRR's first timesteps (which would time out).
+            states = self.env.curr_states
+            locations = np.fromiter((s.location for s in states), dtype=np.int64)
+            planner().plan(locations, np.zeros_like(locations), locations)
+            self.planner = planner()
         except BaseException:
             self._fail()
             raise
