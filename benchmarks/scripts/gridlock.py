@@ -33,12 +33,13 @@ BIN, WINDOW = 100, 1000
 
 
 def run(
-    robots: int, horizon: int, turns: bool, guidance: float, policy: str, guide_replans: int = 0
-) -> dict:
+    robots: int, horizon: int, turns: bool, guidance: float, policy: str,
+    guide_replans: int = 0, patience: int = 16,
+) -> dict:  # fmt: skip
     """One episode; its tasks finished per :data:`BIN` timesteps and the windows."""
     nav = {
         "name": "pibt", "record": False, "turns": turns, "guidance": guidance,
-        "guide_replans": guide_replans,
+        "guide_replans": guide_replans, "patience": patience,
     }  # fmt: skip
     starts = "file" if robots <= 5000 else "random"
     scenario = lorr_scenario(PROBLEM, num_robots=robots, horizon=horizon, starts=starts,
@@ -55,7 +56,7 @@ def run(
     windows = np.convolve(per, np.ones(WINDOW // BIN, dtype=np.int64), "valid")
     return {
         "robots": robots, "horizon": horizon, "turns": turns, "guidance": guidance,
-        "guide_replans": guide_replans, "policy": policy, "finished": len(done), "per_bin": per.tolist(),
+        "guide_replans": guide_replans, "patience": patience, "policy": policy, "finished": len(done), "per_bin": per.tolist(),
         "best_window": int(windows.max()), "last_window": int(windows[-1]),
         "ratio": float(windows[-1] / max(1, windows.max())),
         "max_stall": float(sim.executor.stats()["max_stall"]),
@@ -70,15 +71,20 @@ def main() -> None:
     parser.add_argument("--no-turns", dest="turns", action="store_false")
     parser.add_argument("--guidance", type=float, default=1.0)
     parser.add_argument("--guide-replans", type=int, default=0)
+    parser.add_argument("--patience", type=int, default=16)
     parser.add_argument("--policy", default="mpdm")
     parser.add_argument("--output", type=Path)
     args = parser.parse_args()
     if args.horizon < WINDOW or args.horizon % BIN:
         parser.error(f"--horizon must be a multiple of {BIN} and at least {WINDOW}")
-    r = run(args.robots, args.horizon, args.turns, args.guidance, args.policy, args.guide_replans)
+    r = run(
+        args.robots, args.horizon, args.turns, args.guidance, args.policy,
+        args.guide_replans, args.patience,
+    )  # fmt: skip
     model = "turns" if r["turns"] else "no turns"
     print(f"{r['robots']:,} robots, {model}, guidance {r['guidance']:g} "
-          f"(+{r['guide_replans']} re-planned a timestep), {r['policy']}: "
+          f"(+{r['guide_replans']} re-planned a timestep), patience {r['patience']}, "
+          f"{r['policy']}: "
           f"{r['finished']:,} tasks in {r['horizon']:,} timesteps ({r['wall_s']:.0f} s)")  # fmt: skip
     per500 = np.add.reduceat(np.array(r["per_bin"]), np.arange(0, len(r["per_bin"]), 5))
     print("per 500 timesteps:", ", ".join(f"{int(v):,}" for v in per500))

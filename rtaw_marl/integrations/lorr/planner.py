@@ -57,7 +57,7 @@ class PlannerSpec:
     problem: str
     stats: str
     timesteps: int
-    patience: int
+    patience: int | None
     guidance: float
     guide_replans: int
     seed: int = 0
@@ -76,7 +76,8 @@ class FleetPlanner(PIBTExecutor):
     Args:
         layout: The problem's map.
         num_robots: LoRR's team size.
-        patience: Timesteps before a robot not getting nearer its goal is stuck.
+        patience: Timesteps before a robot not getting nearer its goal is stuck
+            (``None``: no priority rotation).
         guidance: The guide paths' congestion weight (``0``: none).
         guide_replans: Guide paths re-planned per timestep besides the needed ones.
         seed: Seeds the tie-breaks and priority rotation.
@@ -87,7 +88,7 @@ class FleetPlanner(PIBTExecutor):
         layout: Layout,
         num_robots: int,
         *,
-        patience: int,
+        patience: int | None,
         guidance: float,
         guide_replans: int,
         seed: int = 0,

@@ -40,6 +40,10 @@ __all__ = [
 #: half the tie-break, so the next guide cell gains 2.5 over any other: more than the
 #: two steps by which the distances of a cell's neighbours can differ.
 GUIDE_TIE = -5.0
+#: The tie-break of staying for a robot on its guide path: it waits for its guide cell
+#: rather than step off the path into a cell one nearer its goal (as the kit's PIBT,
+#: whose heuristic is the distance to the guide path plus the path left).
+STAY_TIE = -3.0
 #: The reverse of each of ``nbr``'s columns (``+x, -x, +y, -y``).
 _REVERSE = np.array([1, 0, 3, 2], dtype=np.int64)
 
@@ -227,6 +231,7 @@ def guide_ties(pos, buf, start, length, at, nbr, tie) -> None:
         k = _edge(nbr, pos[r], buf[s + at[r] + 1])
         if k >= 0:
             tie[r, k] = GUIDE_TIE
+            tie[r, 4] = STAY_TIE
 
 
 @njit(cache=True, nogil=True)

@@ -9,10 +9,13 @@ default planner builds on, for 10,000 robots.
 Each assigned robot walks to its task's origin, then to its destination, along its
 goal's BFS field; a robot without a task keeps its cell unless pushed. Priorities are
 the timesteps since a robot's goal last changed (ties: the lower id), so a robot that
-is kept waiting gains priority until it moves first. A busy robot that has not got
-nearer its goal for ``patience`` timesteps is *stuck* and takes a random priority each
-timestep (priority rotation): fixed priorities can hold two robots in a standoff
-forever where one must back off. The TTD of a task is its pickup time minus its
+is kept waiting gains priority until it moves first, and a robot with a goal gains 10
+more for every timestep it spends on a dead-end cell (LoRR kit's planner: it must back
+out before the robots queued behind it can move). With ``patience`` set, a busy robot
+that has not got nearer its goal for that many timesteps is *stuck* and takes a random
+priority each timestep (priority rotation), which breaks standoffs on maps without
+dead-end bonuses to do it; at 10,000 robots it scatters the queues and deepens the jams,
+so LoRR's model (the default) has none. The TTD of a task is its pickup time minus its
 assignment time, waits included; the robot is free at the delivery time. Decisions are
 taken when a robot is free, in order of robot id within a timestep.
 
@@ -59,6 +62,8 @@ from rtaw_marl.sim.mapf.schedule import Schedule
 __all__ = ["PIBTExecutor"]
 
 _IDLE, _TO_PICKUP, _TO_DELIVERY = 0, 1, 2
+#: Priority a busy robot gains per timestep on a dead-end cell (LoRR kit's planner).
+_DEAD_END_BONUS = 10
 
 
 class _Fields:
@@ -127,7 +132,7 @@ class PIBTExecutor(Executor):
             declared deadlocked (:class:`~rtaw_marl.errors.PlanningError`).
         patience: Timesteps a busy robot may go without getting nearer its goal before
             it is *stuck*: stuck robots take random priorities each timestep (priority
-            rotation), which breaks the standoffs fixed priorities cannot.
+            rotation); ``None``: no rotation.
         record: Keep every robot's cell at every timestep (for :meth:`schedule` and the
             conflict checker): ``4 M`` bytes per timestep.
         turns: LoRR's action model (:mod:`~rtaw_marl.sim.mapf._turns`): robots start
@@ -144,10 +149,14 @@ class PIBTExecutor(Executor):
     releases = True
 
     def __init__(
-        self, *, stall_limit: int, patience: int, record: bool, turns: bool, guidance: float,
+        self, *, stall_limit: int, patience: int | None, record: bool, turns: bool,
+        guidance: float,
         guide_replans: int,
     ) -> None:  # fmt: skip
-        for key, value in (("stall_limit", stall_limit), ("patience", patience)):
+        checked = [("stall_limit", stall_limit)]
+        if patience is not None:
+            checked.append(("patience", patience))
+        for key, value in checked:
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"navigator.{key} must be a positive integer, got {value!r}")
         if not isinstance(turns, bool):
@@ -174,6 +183,7 @@ class PIBTExecutor(Executor):
         check_whole_seconds(config, self.name)
         self._bound = True
         self.index, self.cells, self.nbr = compact_graph(layout.obstacles)
+        self._dead_end = (self.nbr >= 0).sum(axis=1) == 1
         # The distance model's fields are the same BFS distances: taking them from its cache
         # shares each search with the policy's queries (a robot's decision is at the
         # cell whose field it just followed).
@@ -201,6 +211,7 @@ class PIBTExecutor(Executor):
         self.since = np.zeros(m, dtype=np.int64)
         self.best = np.zeros(m, dtype=np.int64)  # nearest the goal so far
         self.stuck = np.zeros(m, dtype=np.int64)  # timesteps without getting nearer
+        self.boost = np.zeros(m, dtype=np.int64)  # dead-end bonus since the goal changed
         self.rotations = 0
         self.occ_now = np.full(len(self.cells), -1, dtype=np.int64)
         self.occ_now[self.pos] = np.arange(m)
@@ -347,6 +358,7 @@ class PIBTExecutor(Executor):
         self.since[robot] = 0
         self.stuck[robot] = 0
         self.best[robot] = 1 << 30
+        self.boost[robot] = 0
 
     def _picked_up(self, robot: int) -> None:
         task = int(self.task[robot])
@@ -394,8 +406,11 @@ class PIBTExecutor(Executor):
         """Plan and take one timestep's moves (``pos``, ``heading``, ``action``)."""
         m = self.num_robots
         # Waiting longest first; idle robots last; ties: the lower id.
-        prio = self.since.astype(np.float64)
-        stuck = busy & (self.stuck >= self.patience)
+        # A robot with a goal in a dead end gains 10 a timestep there (the kit's PIBT):
+        # it must back out before the robots queued behind it can move.
+        self.boost[busy & self._dead_end[self.pos]] += _DEAD_END_BONUS
+        prio = (self.since + self.boost).astype(np.float64)
+        stuck = busy & (self.stuck >= (self.patience or 1 << 62))
         if stuck.any():
             # Priority rotation: a fixed order can hold two robots in a standoff forever.
             prio[stuck] = self.rng.random(int(stuck.sum())) * (prio.max() + 1.0)

@@ -143,7 +143,9 @@ class PIBTConfig(NavigatorOption):
         stall_limit: Timesteps without any robot reaching a goal before the episode
             stops with an error (a deadlock or livelock).
         patience: Timesteps a busy robot may go without getting nearer its goal before
-            its priority is drawn at random each timestep (priority rotation).
+            its priority is drawn at random each timestep (priority rotation); ``null``
+            (the default, as LoRR's planner): none, dead ends handled by a priority
+            bonus instead. Rotation scatters the queues of a 10,000-robot fleet.
         record: Keep every robot's cell at every timestep, for the conflict checker and
             the renderer (``4 M`` bytes per timestep). ``false``: rtaw-eval's episodes
             are not checked against the schedule (there is none; PIBT itself keeps
@@ -171,7 +173,7 @@ class PIBTConfig(NavigatorOption):
     # Tasks are timed by the executed moves in whole seconds: no completion noise.
     sim_defaults: ClassVar[Mapping[str, float]] = _NO_NOISE
     stall_limit: int = 10_000
-    patience: int = 16
+    patience: int | None = None
     record: bool = True
     cache_mb: float = 1024.0
     turns: bool = True
@@ -183,7 +185,8 @@ class PIBTConfig(NavigatorOption):
         if isinstance(g, bool) or not isinstance(g, (int, float)) or not 0 <= g < float("inf"):
             raise ConfigError(f"navigator.guidance must be a number >= 0, got {g!r}")
         _check_positive("navigator.stall_limit", self.stall_limit, "integer", int)
-        _check_positive("navigator.patience", self.patience, "integer", int)
+        if self.patience is not None:
+            _check_positive("navigator.patience", self.patience, "integer", int)
         _check_positive("navigator.cache_mb", self.cache_mb, "number", float)
         r = self.guide_replans
         if isinstance(r, bool) or not isinstance(r, int) or r < 0:
