@@ -27,6 +27,7 @@ import numpy as np
 from rtaw_marl.integrations.lorr.pair_scheduler import PairScheduler
 from rtaw_marl.integrations.lorr.scheduler import PolicyScheduler, Timestep, stats_dict
 from rtaw_marl.policies.pairs import PairGreedy
+from rtaw_marl.sim.distances import GridDistance
 from rtaw_marl.utils.atomic import atomic_write
 
 __all__ = ["SPEC_VARIABLE", "RunSpec", "pyTaskScheduler"]
@@ -93,7 +94,13 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler | PairScheduler:
         ).spec()
     )
     if spec.policy == PairGreedy.name:
-        return PairScheduler(sim.layout, sim.distance_model)
+        # Every open task's pickup field is read every timestep: a cache for the whole
+        # window (a smaller one evicts and recomputes fields each timestep).
+        window = int(scenario.sim["queue_len"])
+        field_mb = (sim.layout.width + 2) * (sim.layout.height + 2) * 4 / 2**20
+        model = GridDistance(sim.layout, cache_mb=max(1024.0, 1.25 * window * field_mb))
+        first = np.asarray(getattr(sim.stream, "tasks", np.zeros((0, 4))))[:window, :2]
+        return PairScheduler(sim.layout, model, first_pickups=first)
     if is_import_spec(spec.policy):
         if spec.search_path is not None and spec.search_path not in sys.path:
             sys.path.append(spec.search_path)

@@ -23,7 +23,7 @@ import numpy as np
 
 from rtaw_marl.integrations.lorr.scheduler import SchedulerStats, Timestep
 from rtaw_marl.policies.pairs import PAIR_WEIGHT, greedy_pairs, pair_costs
-from rtaw_marl.sim.distances import DistanceModel
+from rtaw_marl.sim.distances import GridDistance
 from rtaw_marl.sim.layout import Layout
 
 __all__ = ["PairScheduler"]
@@ -38,16 +38,20 @@ class PairScheduler:
         weight: Cost of a cell of travel to the first errand against one of the task's
             length.
         clock: Seconds (``time.perf_counter``).
+        first_pickups: ``int [K, 2]`` pickup cells ``(x, y)`` of the problem's first
+            tasks, whose distance fields :meth:`preload` computes.
     """
 
     def __init__(
         self,
         layout: Layout,
-        distance_model: DistanceModel,
+        distance_model: GridDistance,
         weight: float = PAIR_WEIGHT,
         clock: Callable[[], float] = time.perf_counter,
+        first_pickups: np.ndarray | None = None,
     ) -> None:
         self.layout, self.distance_model = layout, distance_model
+        self._first_pickups = np.zeros((0, 2), np.int64) if first_pickups is None else first_pickups
         self.weight, self.clock = float(weight), clock
         self.width = layout.width
         # Per known task: first errand (linearized cell) and length (travel through all).
@@ -57,9 +61,19 @@ class PairScheduler:
         self.stats = SchedulerStats()
 
     def preload(self, budget_s: float) -> int:
-        """Nothing to preload (kept for the entry's interface); returns 0."""
-        del budget_s
-        return 0
+        """Compute the distance fields of the first tasks' pickups in LoRR's preprocessing
+        time (the first timestep pairs every robot with a whole window of tasks).
+
+        Returns:
+            The cells whose fields were computed within ``budget_s`` seconds.
+        """
+        cells = np.unique(np.asarray(self._first_pickups, dtype=np.int64), axis=0)
+        deadline = self.clock() + budget_s
+        done = 0
+        while done < len(cells) and self.clock() < deadline:
+            self.distance_model.fields(cells[done : done + 32])
+            done = min(done + 32, len(cells))
+        return done
 
     def plan(self, step: Timestep, budget_s: float) -> list[int]:
         """The schedule for this timestep: each robot's task id or ``-1``.
