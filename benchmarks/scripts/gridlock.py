@@ -34,7 +34,7 @@ BIN, WINDOW = 100, 1000
 
 def run(
     robots: int, horizon: int, turns: bool, guidance: float, policy: str,
-    guide_replans: int = 0, patience: int = 16,
+    guide_replans: int = 0, patience: int | None = None,
 ) -> dict:  # fmt: skip
     """One episode; its tasks finished per :data:`BIN` timesteps and the windows."""
     nav = {
@@ -71,7 +71,7 @@ def main() -> None:
     parser.add_argument("--no-turns", dest="turns", action="store_false")
     parser.add_argument("--guidance", type=float, default=1.0)
     parser.add_argument("--guide-replans", type=int, default=0)
-    parser.add_argument("--patience", type=int, default=16)
+    parser.add_argument("--patience", type=int, default=None, help="priority rotation")
     parser.add_argument("--policy", default="mpdm")
     parser.add_argument("--output", type=Path)
     args = parser.parse_args()
