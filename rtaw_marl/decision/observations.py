@@ -229,11 +229,12 @@ class AgentViews:
     def observe(self, robot: int) -> dict[str, Any]:
         """``{"observation": features, "action_mask": int8 [N]}`` of ``robot``.
 
-        The mask is the acting robot's legal slots in a live decision (the queued tasks,
-        and with ``sim.reassign`` the reassignable ones) and all zeros otherwise. With
-        ``sim.reassign`` the observation also holds ``"reassignable": int8 [N]``, the
-        slots of tasks held by a robot on its way to the pickup that the acting robot
-        may take (zeros for the other agents).
+        The mask is the queue's occupancy (the unassigned tasks) for the acting robot of
+        a live decision and all zeros otherwise. With ``sim.reassign`` the observation
+        also holds ``"reassignable": int8 [N]``, the slots of tasks held by a robot on its
+        way to the pickup that the acting robot may also take (zeros for the other
+        agents): legal actions beyond the mask, so a policy that knows nothing of
+        reassignment acts as before.
         """
         sim = self.sim
         self._refresh()
@@ -279,7 +280,7 @@ class AgentViews:
         sim = self.sim
         if self._stamp == sim.decisions:
             return
-        self._mask = sim.legal_actions().astype(np.int8)
+        self._mask = sim.queue_mask.astype(np.int8)
         self._held = sim.reassignable().astype(np.int8)
         self._zero_mask = np.zeros(sim.queue_len, dtype=np.int8)
         self._acting = self._others = self._all = None

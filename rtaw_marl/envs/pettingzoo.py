@@ -85,9 +85,10 @@ all-True mask and marks the acting row in `("agents", "mask")`).
 With LoRR's reassignment (`sim.reassign=true`, the default of `scenario=lorr`) a task
 stays in its slot, *held*, until its robot reaches the pickup; the observation gains
 `reassignable` `[N]` int8 (1 for the held slots the acting robot may take: not moved
-yet in this timestep; zeros for other agents), and `action_mask` is 1 for those too.
-Taking one frees its holder where it stands; the holder acts next, in the same
-timestep.
+yet in this timestep; zeros for other agents). They are legal actions beyond
+`action_mask`, which stays the unassigned tasks, so a policy or library that knows
+nothing of reassignment acts as before. Taking one frees its holder where it stands;
+the holder acts next, in the same timestep.
 
 ## State
 

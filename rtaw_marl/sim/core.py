@@ -33,7 +33,6 @@ done. :meth:`WarehouseSim.schedule` returns the executed episode.
 
 from __future__ import annotations
 
-import time
 import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -41,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
+from rtaw_marl.sim.clock import DecisionClock
 from rtaw_marl.sim.config import REWARDS, SimBuffers, SimConfig
 from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, InstantTravel
@@ -48,6 +48,7 @@ from rtaw_marl.sim.inputs import slot_index
 from rtaw_marl.sim.layout import Layout
 from rtaw_marl.sim.metrics import EpisodeMetrics, compute_metrics
 from rtaw_marl.sim.queue_distances import QueueDistances
+from rtaw_marl.sim.reassign import Reassignment
 from rtaw_marl.sim.tasks import TaskStream
 
 if TYPE_CHECKING:
@@ -81,7 +82,7 @@ class SimState:
     noise: np.ndarray | None
 
 
-class WarehouseSim:
+class WarehouseSim(Reassignment):
     """One warehouse episode at a time, stepped one decision at a time.
 
     Args:
@@ -163,10 +164,9 @@ class WarehouseSim:
         self._executor = InstantTravel() if executor is None else executor
         self._executor.bind(config, layout, distance_model)
         self._reassign = config.reassign
-        self._decision_budget = config.decision_budget
-        self._time_budget = None if config.time_budget_ms is None else config.time_budget_ms / 1e3
-        budgeted = self._decision_budget is not None or self._time_budget is not None
-        if budgeted and not self._executor.releases:
+        seconds = None if config.time_budget_ms is None else config.time_budget_ms / 1e3
+        self._clock = DecisionClock(config.decision_budget, seconds)
+        if self._clock.active and not self._executor.releases:
             raise ConfigError(
                 "sim.decision_budget and sim.time_budget_ms need an executor that moves "
                 f"robots timestep by timestep (navigator=pibt), not {self._executor.name!r}"
@@ -178,9 +178,6 @@ class WarehouseSim:
             )
         self.done = True
         self.truncated = False
-        # The per-timestep budget: its timestep, decisions taken and seconds spent there.
-        self._budget_at, self._budget_used, self._budget_spent = -1.0, 0, 0.0
-        self._asked_at = 0.0
 
     # ------------------------------------------------------------------ reset
     def reset(self, seed: int | None = None) -> None:
@@ -237,8 +234,7 @@ class WarehouseSim:
         self.done = False
         self.truncated = False
         self.last_ttd = 0.0
-        # The per-timestep budget: its timestep, decisions taken and seconds spent there.
-        self._budget_at, self._budget_used, self._budget_spent = -1.0, 0, 0.0
+        self._clock.reset()
         self._select_next_robot(0.0)
 
     def _draw(
@@ -363,7 +359,7 @@ class WarehouseSim:
             self._take_held(slot)
 
         robot, now = self.robot, self.time
-        self._charge(now)
+        self._clock.charge(now)
         task = int(self.queue_ids[slot])
         dist = self._dist if self._dist is not None else self.robot_distances()
         ttd = float(dist[slot])
@@ -410,61 +406,6 @@ class WarehouseSim:
             return -length
         return -(ttd + length)
 
-    def reassignable(self) -> np.ndarray:
-        """``bool [N]``: the held slots a free robot may take now (``sim.reassign``): the
-        task not picked up and not already moved in this timestep. All ``False``
-        without reassignment."""
-        held = self.queue_holder >= 0
-        moved = self.task_moved[np.maximum(self.queue_ids, 0)] == self.time
-        return held & ~moved
-
-    def legal_actions(self) -> np.ndarray:
-        """``bool [N]``: the slots the selected robot may take: :attr:`queue_mask`, and
-        with ``sim.reassign`` the :meth:`reassignable` ones."""
-        if not self._reassign:
-            return self.queue_mask.copy()
-        return self.queue_mask | self.reassignable()
-
-    def robot_cells(self, robots: np.ndarray) -> np.ndarray:
-        """``int64 [R, 2]`` where ``robots`` stand now: a free robot at its cell, a busy
-        one (collision-aware lifelong executors) where it is on its way; with instant
-        travel, where each is next free."""
-        positions = getattr(self._executor, "positions", None)
-        robots = np.asarray(robots, dtype=np.int64)
-        return self.robot_xy[robots].copy() if positions is None else positions(robots)
-
-    def distances_from(self, xy: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        """Distances ``float64 [R, K]`` from the cells ``xy int [R, 2]`` to the origins
-        of ``slots int [K]`` (held slots included)."""
-        return self._slots.distances_from(np.asarray(xy, dtype=np.int64), slots)
-
-    def _hold(self, slot: int, robot: int) -> None:
-        self.queue_mask[slot] = False
-        self.queue_holder[slot] = robot
-        self._queue_distances.slot_changed(slot)
-
-    def _take_held(self, slot: int) -> None:
-        """The selected robot takes a held task: its holder is free now where it stands."""
-        task, holder = int(self.queue_ids[slot]), int(self.queue_holder[slot])
-        if self.task_moved[task] == self.time:
-            raise InvalidActionError(
-                f"action {slot}: task {task} already changed hands at t={self.time:g}"
-            )
-        self.robot_xy[holder] = self._executor.release(holder, self.time)
-        self.robot_free_at[holder] = self.time
-        self._queue_distances.robot_moved(holder)
-        self._owed[holder] = False  # its task is not finished: nothing new is revealed
-        self.task_moved[task] = self.time
-        self.queue_mask[slot] = True  # the common path assigns it (and holds it again)
-        self.queue_holder[slot] = -1
-
-    def _drop_started(self) -> None:
-        """Held tasks picked up since the last decision leave their slots."""
-        held = np.flatnonzero(self.queue_holder >= 0)
-        if len(held):
-            for slot in held[self._executor.started(self.queue_ids[held])].tolist():
-                self._empty(slot)
-
     def _empty(self, slot: int) -> None:
         self._queue_distances.slot_changed(slot)
         self.queue_holder[slot] = -1
@@ -500,24 +441,8 @@ class WarehouseSim:
         self.queue_rows[slot] = row
         self.queue_length[slot] = length
 
-    def _charge(self, now: float) -> None:
-        """Count a decision (and the policy's time on it) against ``now``'s budget."""
-        if self._budget_at != now:
-            self._budget_at, self._budget_used, self._budget_spent = now, 0, 0.0
-        self._budget_used += 1
-        if self._time_budget is not None:
-            self._budget_spent += time.perf_counter() - self._asked_at
-
-    def _spent(self, now: float) -> bool:
-        """Whether the policy's budget for timestep ``now`` is used up."""
-        if self._budget_at != now:
-            return False
-        if self._decision_budget is not None and self._budget_used >= self._decision_budget:
-            return True
-        return self._time_budget is not None and self._budget_spent >= self._time_budget
-
     def _select_next_robot(self, now: float) -> None:
-        if self._spent(now):
+        if self._clock.spent(now):
             self._executor.defer()  # the free robots wait for the next timestep
         self.robot, self.time = self._executor.next_robot(now)
         self._dist = None
@@ -534,7 +459,7 @@ class WarehouseSim:
             empty = np.flatnonzero(~self.queue_mask & (self.queue_holder < 0))
             if len(empty):
                 self._refill(int(empty[0]), -1, self.time)
-        self._asked_at = time.perf_counter()
+        self._clock.ask()
 
     @property
     def navigator(self) -> DistanceModel:

@@ -48,15 +48,9 @@ from rtaw_marl.errors import ConfigError, InvalidActionError, PlanningError
 from rtaw_marl.sim.distances import DistanceModel, GridDistance
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, SimSettings, check_whole_seconds
 from rtaw_marl.sim.layout import Layout
-from rtaw_marl.sim.mapf._guidance import (
-    guide_advance,
-    guide_compact,
-    guide_drop,
-    guide_plan,
-    guide_ties,
-)
 from rtaw_marl.sim.mapf._pibt import bfs_compact, compact_graph, pibt_step
 from rtaw_marl.sim.mapf._turns import FORWARD, WAIT, turn_step
+from rtaw_marl.sim.mapf.guide_paths import GuidePaths
 from rtaw_marl.sim.mapf.schedule import Schedule
 
 __all__ = ["PIBTExecutor"]
@@ -224,7 +218,7 @@ class PIBTExecutor(Executor):
         self.released = 0
         self.deferred = 0
         self.deferred_robots: list[int] = []
-        self._guide_reset(m)
+        self.guides = GuidePaths(self.nbr, m, self.guidance, self.guide_replans)
         self.free = [int(r) for r in np.flatnonzero(records.robot_free_at <= 0)]
         heapq.heapify(self.free)
         self.waiting = sorted(
@@ -420,8 +414,7 @@ class PIBTExecutor(Executor):
         order = first[np.argsort(-prio[first], kind="stable")]
         tie = self.rng.random((m, 5))
         if self.guidance > 0:
-            g = self.guide
-            guide_ties(self.pos, g["buf"], g["start"], g["length"], g["at"], self.nbr, tie)
+            self.guides.ties(self.pos, tie)
         if self.turns:
             turn_step(
                 self.pos, self.heading, self.target, order, self.goal_field, self.fields.store,
@@ -435,68 +428,9 @@ class PIBTExecutor(Executor):
                 self.occ_now, self.occ_next, self.nxt,
             )  # fmt: skip
 
-    def _guide_compact(self) -> None:
-        """Keep only the cells still to walk, in a buffer sized by them (twice, and room
-        for a path of every cell): it does not grow with the episode."""
-        g, c = self.guide, len(self.cells)
-        live = int((g["length"] - g["at"])[g["start"] >= 0].sum())
-        out = np.empty(max(self._guide_capacity, 2 * live + 2 * c), np.int64)
-        self.guide_cursor = guide_compact(g["buf"], g["start"], g["length"], g["at"], out)
-        g["buf"] = out
-
-    def _guide_reset(self, m: int) -> None:
-        """Empty guide paths and flows (:mod:`~rtaw_marl.sim.mapf._guidance`)."""
-        c = len(self.cells)
-        self._guide_capacity = 8 * c + 64 * m
-        self.guide = {
-            "buf": np.empty(self._guide_capacity, dtype=np.int64),
-            "start": np.full(m, -1, dtype=np.int64),
-            "length": np.zeros(m, dtype=np.int64),
-            "at": np.zeros(m, dtype=np.int64),
-            "flow": np.zeros((c, 4), dtype=np.int32),
-            "need": np.zeros(m, dtype=bool),
-            "planned_at": np.zeros(m, dtype=np.int64),
-            "cost": np.zeros(c), "parent": np.zeros(c, dtype=np.int64),
-            "stamp": np.full(c, -1, dtype=np.int64), "heap_key": np.empty(4 * c),
-            "heap_node": np.empty(4 * c, dtype=np.int64),
-        }  # fmt: skip
-        self.guide_cursor = 0
-        self.guide_epoch = 0
-        self.guide_paths = 0
-
     def _guide_update(self) -> None:
-        """Advance every robot along its guide path; plan new ones where needed, and
-        re-plan ``guide_replans`` more, the longest unchanged first."""
-        g = self.guide
-        guide_advance(
-            self.pos, self.goal, g["buf"], g["start"], g["length"], g["at"], g["flow"],
-            self.nbr, g["need"],
-        )  # fmt: skip
-        robots = np.flatnonzero(g["need"]).astype(np.int64)
-        g["planned_at"][robots] = self.t
-        if self.guide_replans:
-            kept = np.flatnonzero((g["start"] >= 0) & ~g["need"])
-            if len(kept):
-                n = min(self.guide_replans, len(kept))
-                old = kept[np.argsort(g["planned_at"][kept], kind="stable")[:n]]
-                guide_drop(old, g["buf"], g["start"], g["length"], g["at"], g["flow"], self.nbr)
-                g["planned_at"][old] = self.t
-                robots = np.concatenate([robots, old])
-        if not len(robots):
-            return
-        done = 0
-        while done < len(robots):
-            self.guide_cursor, planned = guide_plan(
-                robots[done:], self.pos, self.goal, self.goal_field, self.fields.store,
-                self.nbr, g["flow"], self.guidance, g["buf"], self.guide_cursor, g["start"],
-                g["length"], g["at"], g["cost"], g["parent"], g["stamp"],
-                self.guide_epoch + done, g["heap_key"], g["heap_node"],
-            )  # fmt: skip
-            done += planned
-            if done < len(robots):
-                self._guide_compact()
-        self.guide_epoch += len(robots)
-        self.guide_paths += len(robots)
+        """Advance the guide paths after a timestep; plan the needed ones."""
+        self.guides.update(self.pos, self.goal, self.goal_field, self.fields.store, self.t)
 
     def _progress(self, busy: np.ndarray) -> None:
         """Count, per busy robot, the timesteps since it last got nearer its goal."""
@@ -532,7 +466,7 @@ class PIBTExecutor(Executor):
         if self.turns:
             out["turn_actions"] = float(self.turn_actions)
         if self.guidance > 0:
-            out["guide_paths"] = float(self.guide_paths)
+            out["guide_paths"] = float(self.guides.planned)
         if self.released:
             out["reassigned"] = float(self.released)
         if self.deferred:

@@ -153,7 +153,7 @@ def test_the_guide_buffer_stays_bounded_over_a_long_episode() -> None:
     sizes = []
     while not sim.done:
         sim.step(rule.act_sim(sim))
-        sizes.append(len(ex.guide["buf"]))
+        sizes.append(len(ex.guides.buf))
     c, m = len(ex.cells), ex.num_robots
     assert max(sizes) == 8 * c + 64 * m  # never grown on this map
     written = ex.stats()["guide_paths"]
