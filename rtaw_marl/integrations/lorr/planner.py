@@ -199,9 +199,9 @@ class pyMAPFPlanner:
 
             # One timestep planned and thrown away compiles the kernels here, in the
             # preprocessing time, not in LoRR's first timesteps (which would time out).
-            states = self.env.curr_states
-            locations = np.fromiter((s.location for s in states), dtype=np.int64)
-            planner().plan(locations, np.zeros_like(locations), locations)
+            # (On distinct free cells: LoRR has not placed its robots yet.)
+            cells = np.flatnonzero(~layout.obstacles.ravel())[: int(self.env.num_of_agents)]
+            planner().plan(cells, np.zeros_like(cells), cells)
             self.planner = planner()
         except BaseException:
             self._fail()
