@@ -18,8 +18,10 @@ distance as heuristic (admissible: every edge costs at least 1). As a robot walk
 path the edges behind it leave the flow; a robot pushed off its path, or given a new
 goal, gets a new one. PIBT then ranks a robot's neighbouring cells by BFS distance to the
 goal as before, with the guide path's next cell first (:data:`GUIDE_TIE`: it gains 2.5,
-more than the BFS distances of two neighbours of one cell can differ); when that cell
-is taken, the nearest free one.
+more than the BFS distances of two neighbours of one cell can differ) and staying
+second (:data:`STAY_TIE`: a robot waits for its guide cell rather than step off the
+path into a cell one nearer its goal, as the kit's PIBT); it leaves the path only when
+pushed.
 """
 
 from __future__ import annotations
