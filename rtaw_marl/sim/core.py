@@ -406,6 +406,13 @@ class WarehouseSim(Reassignment):
             return -length
         return -(ttd + length)
 
+    def _drop_started(self) -> None:
+        """Held tasks picked up since the last decision leave their slots."""
+        held = np.flatnonzero(self.queue_holder >= 0)
+        if len(held):
+            for slot in held[self._executor.started(self.queue_ids[held])].tolist():
+                self._empty(slot)
+
     def _empty(self, slot: int) -> None:
         self._queue_distances.slot_changed(slot)
         self.queue_holder[slot] = -1

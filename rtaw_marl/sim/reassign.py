@@ -85,13 +85,3 @@ class Reassignment:
         self.task_moved[task] = self.time
         self.queue_mask[slot] = True  # the common path assigns it (and holds it again)
         self.queue_holder[slot] = -1
-
-    def _drop_started(self) -> None:
-        """Held tasks picked up since the last decision leave their slots."""
-        held = np.flatnonzero(self.queue_holder >= 0)
-        if len(held):
-            for slot in held[self._executor.started(self.queue_ids[held])].tolist():
-                self._empty(slot)
-
-    def _empty(self, slot: int) -> None:
-        raise NotImplementedError  # the simulator's

@@ -54,10 +54,12 @@ class PairScheduler:
         self._first_pickups = np.zeros((0, 2), np.int64) if first_pickups is None else first_pickups
         self.weight, self.clock = float(weight), clock
         self.width = layout.width
-        # Per known task: first errand (linearized cell) and length (travel through all).
-        self._first: dict[int, int] = {}
-        self._length: dict[int, float] = {}
-        self._started: set[int] = set()
+        # The open tasks, in arrays: id, first errand (linearized cell), length (travel
+        # through all errands), and whether its robot has reached the first errand.
+        self._ids = np.zeros(0, dtype=np.int64)
+        self._first = np.zeros(0, dtype=np.int64)
+        self._length = np.zeros(0)
+        self._started = np.zeros(0, dtype=bool)
         self.stats = SchedulerStats()
 
     def preload(self, budget_s: float) -> int:
@@ -89,23 +91,28 @@ class PairScheduler:
         self._sync(step)
         # LoRR is asked about a robot's task until it is known to be started (one call
         # into the kit per robot on its way to a first errand).
-        for task in schedule[schedule >= 0].tolist():
-            if task not in self._started and step.progress(task) > 0:
-                self._started.add(task)
-        started = np.fromiter(self._started, dtype=np.int64, count=len(self._started))
-        robots = np.flatnonzero(~np.isin(schedule, started) | (schedule < 0))
-        tasks = np.array(sorted(set(self._first) - self._started), dtype=np.int64)
+        at = np.searchsorted(self._ids, schedule)
+        known = (schedule >= 0) & (at < len(self._ids))
+        known[known] = self._ids[at[known]] == schedule[known]
+        asked = np.zeros(len(schedule), dtype=bool)
+        asked[known] = ~self._started[at[known]]
+        for i in np.flatnonzero(asked).tolist():
+            self._started[at[i]] = step.progress(int(schedule[i])) > 0
+        started = np.zeros(len(schedule), dtype=bool)
+        started[known] = self._started[at[known]]
+        robots = np.flatnonzero(~started)
+        open_ = np.flatnonzero(~self._started)
         proposed = schedule.copy()
-        if len(robots) and len(tasks):
-            first = np.array([self._first[t] for t in tasks.tolist()], dtype=np.int64)
-            length = np.array([self._length[t] for t in tasks.tolist()])
-            at = np.asarray(step.locations, dtype=np.int64)[robots]
+        if len(robots) and len(open_):
+            at_cells = np.asarray(step.locations, dtype=np.int64)[robots]
             cost = pair_costs(
-                self.distance_model.distance_matrix(self._xy(at), self._xy(first)),
-                length, self.weight,
+                self.distance_model.distance_matrix(
+                    self._xy(at_cells), self._xy(self._first[open_])
+                ),
+                self._length[open_], self.weight,
             )  # fmt: skip
             cols = greedy_pairs(cost)
-            proposed[robots] = np.where(cols >= 0, tasks[np.maximum(cols, 0)], -1)
+            proposed[robots] = np.where(cols >= 0, self._ids[open_][np.maximum(cols, 0)], -1)
         else:
             proposed[robots] = -1
         changed = proposed != schedule
@@ -118,22 +125,26 @@ class PairScheduler:
         return proposed.tolist()
 
     def _sync(self, step: Timestep) -> None:
-        pool = set(int(t) for t in step.pool)
-        for task in set(self._first) - pool:  # finished
-            del self._first[task], self._length[task]
-            self._started.discard(task)
-        new = sorted(pool - set(self._first))
-        if not new:
-            return
-        errands = [np.asarray(step.read_task(t)[0], dtype=np.int64) for t in new]
-        legs = self.distance_model.distance(
-            self._xy(np.concatenate([e[:-1] for e in errands])),
-            self._xy(np.concatenate([e[1:] for e in errands])),
-        )
-        ends = np.cumsum([len(e) - 1 for e in errands])
-        for task, locs, total in zip(new, errands, _sums(legs, ends), strict=True):
-            self._first[task] = int(locs[0])
-            self._length[task] = float(total)
+        """Drop the finished tasks, add the newly revealed ones (ids kept sorted)."""
+        pool = np.fromiter((int(t) for t in step.pool), dtype=np.int64)
+        keep = np.isin(self._ids, pool)
+        new = np.setdiff1d(pool, self._ids)
+        ids, first = self._ids[keep], self._first[keep]
+        length, started = self._length[keep], self._started[keep]
+        if len(new):
+            errands = [np.asarray(step.read_task(int(t))[0], dtype=np.int64) for t in new]
+            legs = self.distance_model.distance(
+                self._xy(np.concatenate([e[:-1] for e in errands])),
+                self._xy(np.concatenate([e[1:] for e in errands])),
+            )
+            ends = np.cumsum([len(e) - 1 for e in errands])
+            ids = np.concatenate([ids, new])
+            first = np.concatenate([first, [e[0] for e in errands]])
+            length = np.concatenate([length, _sums(legs, ends)])
+            started = np.concatenate([started, np.zeros(len(new), dtype=bool)])
+        order = np.argsort(ids, kind="stable")
+        self._ids, self._first = ids[order], first[order].astype(np.int64)
+        self._length, self._started = length[order], started[order]
 
     def _xy(self, locs: np.ndarray) -> np.ndarray:
         locs = np.asarray(locs, dtype=np.int64)
