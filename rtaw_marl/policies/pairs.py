@@ -123,13 +123,12 @@ class PairGreedy:
     At the first decision of a timestep, the robots free now and the robots holding a
     reassignable task (``sim.reassign``: assigned, not yet picked up) are matched to the
     queued and reassignable tasks by :func:`greedy_pairs` on :func:`pair_costs`, from
-    where each robot stands. Each free robot then takes its matched task; taking a
-    held one frees its holder at once, which takes its own match in turn. A holder
-    matched to another task keeps its own unless a free robot takes it (in LoRR's
-    simulator, where every robot is rescheduled every timestep,
-    :class:`~rtaw_marl.integrations.lorr.pair_scheduler.PairScheduler` also moves it).
-    A free robot left without a match takes its cheapest queued task. Without
-    ``sim.reassign`` it matches the free robots to the queued tasks only.
+    where each robot stands, as the winner's scheduler re-pairs every robot without a
+    started task each timestep in LoRR's simulator: a holder matched to another task,
+    or whose task went to another robot, gives its task back (``sim.release``) and
+    decides in this timestep. Each deciding robot then takes its match; one left
+    without a match takes its cheapest queued task. Without ``sim.reassign`` it matches
+    the free robots to the queued tasks only.
 
     Acts on the simulator only (:meth:`act_sim`), like ``batch``: the matching needs
     every robot's position. Its choices are deterministic.
@@ -162,25 +161,35 @@ class PairGreedy:
         legal = sim.legal_actions()
         slots = np.flatnonzero(legal)
         free = sim.free_robots()
-        holders = sim.queue_holder[sim.reassignable()]
+        held = np.flatnonzero(sim.reassignable())
+        holders = sim.queue_holder[held]
         robots = np.concatenate([free, holders])
         cost = pair_costs(
             sim.distances_from(sim.robot_cells(robots), slots), sim.queue_length[slots],
             self.weight,
         )  # fmt: skip
         cols = greedy_pairs(cost)
-        matched = cols[: len(free)] >= 0
-        took = slots[cols[: len(free)][matched]]
-        self._plan = (
-            (id(sim), sim.time),
-            {
-                int(r): (int(s), int(sim.queue_ids[s]))
-                for r, s in zip(free[matched].tolist(), took.tolist(), strict=True)
-            },
-        )
+        # A holder matched elsewhere, or whose task is matched to another robot, gives
+        # its task back now and takes its match in this timestep (LoRR: every robot
+        # without a started task is re-paired each timestep).
+        own = np.searchsorted(slots, held)
+        theirs = cols[len(free) :]
+        taken = np.zeros(len(slots), dtype=bool)
+        taken[cols[cols >= 0]] = True
+        switch = (theirs != own) & ((theirs >= 0) | taken[own])
+        if switch.any():
+            sim.release(holders[switch])
+        deciding = np.concatenate([free, holders[switch]])
+        matched = np.concatenate([cols[: len(free)], theirs[switch]])
+        plan = {
+            int(r): (int(slots[c]), int(sim.queue_ids[slots[c]]))
+            for r, c in zip(deciding.tolist(), matched.tolist(), strict=True)
+            if c >= 0
+        }
+        self._plan = ((id(sim), sim.time), plan)
+        if sim.robot in plan:
+            return plan[sim.robot][0]
         me = int(np.searchsorted(free, sim.robot))
-        if cols[me] >= 0:
-            return int(slots[cols[me]])
         queued = sim.queue_mask[slots]
         row = np.where(queued, cost[me], np.inf) if queued.any() else cost[me]
         return int(slots[int(np.argmin(row))])

@@ -5,8 +5,10 @@ LoRR lets a scheduler change a robot's task until the robot reaches the task's f
 errand. With ``sim.reassign`` an assigned task keeps its queue slot, *held* by its robot
 (``queue_holder``), until the pickup; a free robot may take a held task
 (:meth:`Reassignment.reassignable`), and the holder is then free at once where it
-stands, deciding next in the same timestep. A task changes hands at most once per
-timestep (``task_moved``), so every timestep's decisions end.
+stands, deciding next in the same timestep; a scheduler may also free holders itself
+(:meth:`Reassignment.release`, as a scheduler that re-pairs every robot each timestep
+does). A task changes hands at most once per timestep (``task_moved``), so every
+timestep's decisions end.
 """
 
 from __future__ import annotations
@@ -71,13 +73,44 @@ class Reassignment:
         self.queue_holder[slot] = robot
         self._queue_distances.slot_changed(slot)
 
+    def release(self, robots: np.ndarray) -> None:
+        """The ``robots int [R]`` give their held tasks back, as a scheduler that
+        re-pairs every robot each timestep does in LoRR's simulator: each robot is free
+        at once where it stands and decides in this timestep; its task is queued again
+        (it has changed hands: no robot takes it from a holder again this timestep).
+
+        Raises:
+            InvalidActionError: A robot holds no task it may give back now (see
+                :meth:`reassignable`), or a robot is named twice.
+        """
+        robots = np.asarray(robots, dtype=np.int64).reshape(-1)
+        if len(np.unique(robots)) != len(robots):
+            raise InvalidActionError(f"release: robots named twice in {robots.tolist()}")
+        open_ = np.flatnonzero(self.reassignable())
+        slot_of = dict(zip(self.queue_holder[open_].tolist(), open_.tolist(), strict=True))
+        missing = [r for r in robots.tolist() if r not in slot_of]
+        if missing:
+            raise InvalidActionError(
+                f"release: robots {missing} hold no task they may give back at "
+                f"t={self.time:g} (not assigned, picked up, or moved this timestep)"
+            )
+        for robot in robots.tolist():
+            slot = slot_of[robot]
+            self._free_holder(slot)
+            self._queue_distances.slot_changed(slot)
+
     def _take_held(self, slot: int) -> None:
         """The selected robot takes a held task: its holder is free now where it stands."""
-        task, holder = int(self.queue_ids[slot]), int(self.queue_holder[slot])
+        task = int(self.queue_ids[slot])
         if self.task_moved[task] == self.time:
             raise InvalidActionError(
                 f"action {slot}: task {task} already changed hands at t={self.time:g}"
             )
+        self._free_holder(slot)
+
+    def _free_holder(self, slot: int) -> None:
+        """Slot ``slot``'s holder is free now where it stands; its task is queued."""
+        task, holder = int(self.queue_ids[slot]), int(self.queue_holder[slot])
         self.robot_xy[holder] = self._executor.release(holder, self.time)
         self.robot_free_at[holder] = self.time
         self._queue_distances.robot_moved(holder)

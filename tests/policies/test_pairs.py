@@ -81,6 +81,36 @@ def test_pair_greedy_reassigns_in_the_own_simulator() -> None:
     check_schedule(sim.layout, sim.schedule())
 
 
+def test_pair_greedy_re_pairs_holders_each_timestep() -> None:
+    """Holders matched to another task give theirs back (``sim.release``) and take their
+    match in the same timestep, as LoRR's re-pairing of every robot without a started
+    task; every planned task is then legal for its robot."""
+    sim = _lorr_sim(horizon=120)
+    policy = PairGreedy()
+    released: list[int] = []
+    release = sim.release
+
+    def spy(robots: np.ndarray) -> None:
+        released.extend(np.asarray(robots).tolist())
+        release(robots)
+
+    sim.release = spy  # type: ignore[method-assign]
+    sim.reset(4)
+    policy.reset(4)
+    while not sim.done:
+        before = len(released)
+        slot = policy.act_sim(sim)
+        assert sim.legal_actions()[slot]
+        if len(released) > before:
+            now = sim.time
+            freed = set(sim.free_robots().tolist())
+            assert set(released[before:]) <= freed
+            assert all(t == now for t in sim.robot_free_at[released[before:]])
+        sim.step(slot)
+    assert released
+    assert sim.metrics().tasks_finished > 0
+
+
 def test_pair_greedy_without_reassignment_takes_queued_tasks() -> None:
     sim = _lorr_sim(reassign=False, horizon=60)
     policy = PairGreedy()

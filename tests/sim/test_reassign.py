@@ -152,3 +152,32 @@ def test_budgets_need_timesteps() -> None:
         _sim(navigator="astar", decision_budget=3)
     with pytest.raises(ConfigError, match="decision_budget"):
         SimConfig(decision_budget=0)
+
+
+def test_release_gives_held_tasks_back_and_frees_their_robots() -> None:
+    """``sim.release``: each holder is free now where it stands and its task queued
+    again, moved for this timestep; robots without a task to give back are refused."""
+    sim = _sim()
+    sim.reset(1)
+    _play_until_held(sim)
+    slot = int(np.flatnonzero(sim.reassignable())[0])
+    holder, task = int(sim.queue_holder[slot]), int(sim.queue_ids[slot])
+    where = sim.robot_cells([holder])[0]
+    with pytest.raises(InvalidActionError, match="named twice"):
+        sim.release(np.array([holder, holder]))
+    with pytest.raises(InvalidActionError, match=rf"robots \[{sim.robot}\] hold no task"):
+        sim.release(np.array([sim.robot]))  # the deciding robot is free
+    sim.release(np.array([holder]))
+    assert holder in sim.free_robots()
+    np.testing.assert_array_equal(sim.robot_xy[holder], where)
+    assert sim.queue_mask[slot]
+    assert sim.queue_holder[slot] == -1
+    assert sim.queue_ids[slot] == task
+    assert not sim.reassignable()[slot]
+    with pytest.raises(InvalidActionError, match="hold no task"):
+        sim.release(np.array([holder]))  # nothing held any more
+    sim.step(slot)  # the queued task is anyone's now, the deciding robot's here
+    assert sim.task_robot[task] != holder
+    while not sim.done:
+        sim.step(int(np.flatnonzero(sim.legal_actions())[0]))
+    assert sim.metrics().tasks_finished > 0
