@@ -166,6 +166,7 @@ ENV_PATH = (
 NEEDS_EXTRA = (
     "envs/torchrl.py", "envs/torchrl_wrapper.py", "envs/mixed.py", "policies/network.py",
     "policies/export.py", "policies/export_check.py", "policies/search_policy.py",
+    "policies/matched.py",
 )  # fmt: skip
 
 

@@ -236,6 +236,7 @@ def policy_specs(cfg: Any, names: list[str]) -> dict[str, PolicySpec]:
     sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}
     if search is not None:
         sources["search"] = as_list(search.policy)
+    sources["matched"] = as_list(getattr(cfg, "matched", None))
     for option in sources:
         key = "search.policy" if option == "search" else option
         if option in names and not sources[option]:
@@ -253,6 +254,8 @@ def policy_specs(cfg: Any, names: list[str]) -> dict[str, PolicySpec]:
             add_labelled(specs, name, PolicySpec.rule(name, cfg.baselines))
         else:
             k = cfg.candidates
+            if name == "matched" and k is None:
+                raise ConfigError("policy=matched needs candidates=K (for example candidates=32)")
             params = () if name != "search" else _search_params(search)
             for label, source in _learned(name, sources[name], k).items():
                 add_labelled(specs, label, PolicySpec(name, source, params, candidates=k))
@@ -305,8 +308,8 @@ def _learned(option: str, sources: list[str], candidates: int | None) -> dict[st
     check_distinct("search.policy" if option == "search" else option, sources)
     tag = "" if candidates is None else f"@k{candidates}"
     labels = sources if option == "pretrained" else checkpoint_labels(sources)
-    if option == "search":
-        tag += "+search"
+    if option in ("search", "matched"):
+        tag += f"+{option}"
     return {f"{label}{tag}": source for label, source in zip(labels, sources, strict=True)}
 
 

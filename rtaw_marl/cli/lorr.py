@@ -183,10 +183,18 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | PlannerSpe
             patience=nav.patience, guidance=nav.guidance, guide_replans=nav.guide_replans,
         )  # fmt: skip
         return {f"{LORR_DEFAULT}+pibt": spec}
-    sources = {"checkpoint": as_list(cfg.checkpoint), "pretrained": as_list(cfg.pretrained)}
+    sources = {
+        "checkpoint": as_list(cfg.checkpoint),
+        "pretrained": as_list(cfg.pretrained),
+        "matched": as_list(cfg.matched),
+    }
     for option, given in sources.items():
         if option in names and not given:
             raise ConfigError(f"policy={option} needs {option}=... (one value or a list)")
+        if given and option not in names:
+            raise ConfigError(f"{option}=... given but policy does not include '{option}'")
+    if "matched" in names and cfg.candidates is None:
+        raise ConfigError("policy=matched needs candidates=K (for example candidates=32)")
     # lorr_default is the kit's own C++ scheduler here (the rule of that name mirrors it
     # in the own simulator).
     rules = (b for b in BASELINES if b not in _NO_OUTSIDE and b != LORR_DEFAULT)
@@ -229,6 +237,7 @@ def _learned(cfg: LoRRConfig, option: str, given: list[str], common: dict[str, A
 
     check_distinct(option, given)
     tag = "" if cfg.candidates is None else f"@k{cfg.candidates}"
+    tag += "+matched" if option == "matched" else ""
     out = {}
     for source, label in zip(given, checkpoint_labels(given), strict=True):
         # Resolved and loaded here (safely, as inside lifelong), so a missing, damaged

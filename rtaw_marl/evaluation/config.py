@@ -25,9 +25,15 @@ class EvalConfig(SimGroups):
             ``random``, ``lookahead``, ``hungarian``, ``batch``, ``hindsight`` (a
             reference that knows the future), ``checkpoint`` (trained files),
             ``pretrained`` (shipped policies; ``rtaw`` is its deprecated name) and
-            ``search`` (learned policies searched at decision time, ``search.policy``).
+            ``search`` (learned policies searched at decision time, ``search.policy``)
+            and ``matched`` (learned policies deciding a timestep's robots together).
         checkpoint: Checkpoint path(s) evaluated when ``policy`` includes ``checkpoint``.
         pretrained: Shipped policy name(s) evaluated when ``policy`` includes ``pretrained``.
+        matched: Learned policies (checkpoint paths or shipped names, one or a list)
+            deciding every free robot of a timestep at once, when ``policy`` includes
+            ``matched``: one network call, then a greedy matching on its
+            log-probabilities (:mod:`rtaw_marl.policies.matched`; needs ``candidates``);
+            labelled ``<name>@k<K>+matched``.
         seeds: Episode seeds; every policy sees the same tasks for the same seed.
         compare_to: A policy name (among ``policy``'s) every other policy is also
             compared with, besides MPDM: a paired TTD difference with its interval.
@@ -54,6 +60,7 @@ class EvalConfig(SimGroups):
     policy: Any = field(default_factory=lambda: ["mpdm", "rbts", "random"])
     checkpoint: Any = None
     pretrained: Any = None
+    matched: Any = None
     seeds: Any = field(default_factory=lambda: [0, 1, 2, 3, 4])
     compare_to: str | None = None
     lower_bound: bool = False
@@ -93,9 +100,14 @@ class RenderConfig(SimGroups):
 
     Attributes:
         policy: One policy: ``mpdm``, ``rbts``, ``random``, ``lookahead``, ``hungarian``,
-            ``checkpoint``, ``pretrained`` or ``search``.
+            ``checkpoint``, ``pretrained``, ``search`` or ``matched``.
         checkpoint: The checkpoint path when ``policy=checkpoint``.
         pretrained: The shipped policy name when ``policy=pretrained``.
+        matched: Learned policies (checkpoint paths or shipped names, one or a list)
+            deciding every free robot of a timestep at once, when ``policy`` includes
+            ``matched``: one network call, then a greedy matching on its
+            log-probabilities (:mod:`rtaw_marl.policies.matched`; needs ``candidates``);
+            labelled ``<name>@k<K>+matched``.
         seed: Episode seed.
         output: The GIF; ``None`` means ``episode.gif`` in the Hydra run folder. A name
             ending in ``.json`` writes the episode in LoRR's output format instead, for
@@ -118,6 +130,7 @@ class RenderConfig(SimGroups):
     policy: str = "mpdm"
     checkpoint: str | None = None
     pretrained: str | None = None
+    matched: Any = None
     seed: int = 0
     output: str | None = None
     fps: int = 8
@@ -153,6 +166,11 @@ class ViewConfig(SimGroups):
             ``rtaw-eval``; ``hindsight`` and ``batch`` included).
         checkpoint: The checkpoint path when ``policy`` includes ``checkpoint``.
         pretrained: The shipped policy name when ``policy`` includes ``pretrained``.
+        matched: Learned policies (checkpoint paths or shipped names, one or a list)
+            deciding every free robot of a timestep at once, when ``policy`` includes
+            ``matched``: one network call, then a greedy matching on its
+            log-probabilities (:mod:`rtaw_marl.policies.matched`; needs ``candidates``);
+            labelled ``<name>@k<K>+matched``.
         seed: Episode seed.
         schedule: Instead of playing ``policy``: one or two saved episodes in LoRR's
             output format (``rtaw-render output=*.json`` or LoRR's ``lifelong``), on the
@@ -170,6 +188,7 @@ class ViewConfig(SimGroups):
     policy: Any = "mpdm"
     checkpoint: str | None = None
     pretrained: str | None = None
+    matched: Any = None
     seed: int = 0
     schedule: Any = None
     output: str | None = None

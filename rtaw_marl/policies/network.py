@@ -40,10 +40,10 @@ from rtaw_marl.policies.labels import checkpoint_labels
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, pretrained_path
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["NetworkPolicy", "checkpoint_path", "load_policy"]
+__all__ = ["PER_TASK_KEYS", "NetworkPolicy", "checkpoint_path", "load_policy"]
 
 #: Observation entries with one row per queue slot (what ``candidates`` selects from).
-_PER_TASK = frozenset({"tasks", "relations", "rivals"})
+PER_TASK_KEYS = frozenset({"tasks", "relations", "rivals"})
 
 
 def load_policy(
@@ -177,7 +177,7 @@ class NetworkPolicy:
         # relations[:, 0] and tasks[:, 4] both hold the free robot's distance / L.
         key = features["relations"][:, 0] if "relations" in features else features["tasks"][:, 4]
         slots = candidate_slots(key, mask, self.candidates)
-        inputs = [x[slots] if k in _PER_TASK else x for k, x in features.items()]
+        inputs = [x[slots] if k in PER_TASK_KEYS else x for k, x in features.items()]
         return int(slots[self._argmax(inputs, mask[slots])])
 
     @torch.no_grad()
@@ -219,7 +219,7 @@ class NetworkPolicy:
             nearest = np.argsort(np.where(mask, key, np.inf), axis=1, kind="stable")
             slots = np.sort(nearest[:, : self.candidates], axis=1)  # [B, K]
             inputs = [
-                _take_slots(x, slots) if k in _PER_TASK else x
+                _take_slots(x, slots) if k in PER_TASK_KEYS else x
                 for k, x in zip(self._features, inputs, strict=True)
             ]
             mask = np.take_along_axis(mask, slots, axis=1)

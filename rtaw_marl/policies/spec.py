@@ -2,10 +2,10 @@
 
 A :class:`PolicySpec` names a policy without building it (it pickles to worker
 processes and records in journals): a rule by name with its parameters, a shipped
-learned policy, a checkpoint file, either searched at decision time (``search``), or a
-user's ``module:Name``. ``rtaw-eval``,
-``rtaw-render``, ``rtaw-view`` and the benchmarks project all resolve their policies
-through it.
+learned policy, a checkpoint file, either searched at decision time (``search``) or
+deciding a timestep's free robots together (``matched``), or a user's ``module:Name``.
+``rtaw-eval``, ``rtaw-render``, ``rtaw-view`` and the benchmarks project all resolve
+their policies through it.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["KINDS", "PolicySpec"]
 
-Kind = Literal["rule", "pretrained", "checkpoint", "search", "import"]
+Kind = Literal["rule", "pretrained", "checkpoint", "search", "matched", "import"]
 #: The kinds of policy a label can stand for.
-KINDS: tuple[Kind, ...] = ("rule", "pretrained", "checkpoint", "search", "import")
+KINDS: tuple[Kind, ...] = ("rule", "pretrained", "checkpoint", "search", "matched", "import")
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,9 @@ class PolicySpec:
         kind: ``"rule"`` (:data:`~rtaw_marl.policies.BASELINES`), ``"pretrained"`` (a
             shipped policy), ``"checkpoint"`` (a file, or a shipped name), ``"search"``
             (a file or shipped name searched at decision time,
-            :mod:`rtaw_marl.policies.search`) or ``"import"`` (``module:Name``,
+            :mod:`rtaw_marl.policies.search`), ``"matched"`` (a file or shipped name
+            deciding every free robot of a timestep at once,
+            :mod:`rtaw_marl.policies.matched`) or ``"import"`` (``module:Name``,
             :mod:`rtaw_marl.policies.user`).
         name: The rule's or shipped policy's name, the checkpoint path, or the spec.
         params: A rule's parameters (:class:`~rtaw_marl.policies.BaselinesConfig`
@@ -96,6 +98,12 @@ class PolicySpec:
             )  # fmt: skip
         from rtaw_marl.policies.network import load_policy  # torch: only when needed
 
+        if self.kind == "matched":
+            from rtaw_marl.policies.matched import MatchedPolicy
+
+            policy = load_policy(self.name, torch_threads=torch_threads, candidates=self.candidates)
+            return MatchedPolicy(policy, name=label)
+
         # A checkpoint= value is a file or a shipped name: load_policy says which is wrong.
         source = self.name if self.kind == "checkpoint" else self.path()
         return load_policy(
@@ -119,7 +127,7 @@ class PolicySpec:
             return None
         from rtaw_marl.policies.pretrained.registry import pretrained_path
 
-        if self.kind in ("checkpoint", "search"):
+        if self.kind in ("checkpoint", "search", "matched"):
             # A checkpoint= value that is no file is a shipped name (load_policy's rule).
             path = Path(self.name)
             return path if path.is_file() else pretrained_path(self.name)

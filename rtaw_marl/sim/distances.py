@@ -406,14 +406,23 @@ class _CellSlots(TargetSlots):
     def distances_from(self, xy: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
         xy = np.asarray(xy, dtype=np.int64).reshape(-1, 2)
         chosen = slice(None) if slots is None else np.asarray(slots)
-        cells, targets = self._cells[chosen], self._xy[chosen]
+        cells = self._cells[chosen]
         if len(xy) <= len(cells):
             # Row by row: stacking P whole fields first would copy P x cells entries.
             out = np.empty((len(xy), len(cells)), dtype=np.float64)
             for i, (x, y) in enumerate(xy.tolist()):
                 out[i] = self._model.field(x, y)[cells]
             return out
-        return self._model.fields(targets)[:, self._model._padded_index(xy)].T.astype(np.float64)
+        # Column by column, each field read in place: stacking K whole fields of a large
+        # map first would copy K x cells entries (113 MB for 400 on warehouse_large).
+        model, src = self._model, self._model._padded_index(xy)
+        keys = cells.tolist()
+        model._compute_missing(keys)  # the missing fields in one kernel call
+        out = np.empty((len(keys), len(xy)), dtype=np.float64)
+        for j, key in enumerate(keys):
+            out[j] = model._cache[key][src]
+        model._evict()
+        return out.T
 
     def distances_from_one(self, x: int, y: int) -> np.ndarray:
         return self._model.field(x, y)[self._cells].astype(np.float64)

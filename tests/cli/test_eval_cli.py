@@ -504,6 +504,32 @@ def test_search_over_a_learned_policy_runs_under_its_own_label(tmp_path: Path, c
     }  # fmt: skip
 
 
+def test_matched_decisions_run_under_their_own_label(tmp_path: Path, cli) -> None:
+    """``policy=matched matched=NAME candidates=K``: NAME deciding each timestep's free
+    robots together, labelled ``NAME@kK+matched``; without ``candidates`` one line."""
+    out = tmp_path / "m.json"
+    result = cli(
+        "eval", "scenario=poc", "sim.queue_len=12", "policy=[pretrained,matched]",
+        "pretrained=shelves_astar_m10_plus", "matched=shelves_astar_m10_plus", "candidates=4",
+        "seeds=[0,1]", "progress=false", f"output={out}",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    data = json.loads(out.read_text())
+    assert list(data["policies"]) == [
+        "shelves_astar_m10_plus@k4", "shelves_astar_m10_plus@k4+matched"
+    ]  # fmt: skip
+    assert all(v > 0 for v in data["policies"]["shelves_astar_m10_plus@k4+matched"]["ttd"])
+    for args, message in [
+        (["policy=matched", "matched=shelves_astar_m10_plus"], "needs candidates=K"),
+        (["policy=matched", "candidates=4"], "policy=matched needs matched=..."),
+        (["matched=shelves_astar_m10_plus"], "matched=... given but policy does not include"),
+    ]:
+        bad = cli("eval", "scenario=poc", "progress=false", *args)
+        assert bad.code == 2, args
+        assert message in bad.err
+        assert "Traceback" not in bad.err
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

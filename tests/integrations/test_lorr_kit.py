@@ -193,10 +193,12 @@ def test_rtaw_lorr_cli(build: KitBuild, tmp_path: Path) -> None:
         ("policy=hindsight", "hindsight needs the episode's future"),
         ("policy=mpdmm", "unknown policy"),
         ("policy=pretrained", "needs pretrained="),
+        ("policy=matched matched=generalist_plus", "policy=matched needs candidates=K"),
+        ("pretrained=generalist_plus", "pretrained=... given but policy does not include"),
         ("planner=astar", "planner must be one of default, pibt"),
         ("planner=pibt", "planner=pibt runs under the kit's default scheduler"),
     ]:
-        args = [f"problem={RANDOM}", bad] if not bad.startswith("problem") else [bad]
+        args = [f"problem={RANDOM}", *bad.split()] if not bad.startswith("problem") else [bad]
         done = subprocess.run(
             [sys.executable, "-m", "rtaw_marl.cli.lorr", *args, f"hydra.run.dir={tmp_path}/x"],
             capture_output=True, text=True,

@@ -142,14 +142,19 @@ def test_rules_schedule_by_lorr_rules(tmp_path: Path, policy: str) -> None:
     assert scheduler.stats.deferred == 0
 
 
-def test_learned_policy_schedules(tmp_path: Path) -> None:
-    """The shipped generalist serves as LoRR's scheduler through the same interface."""
+@pytest.mark.parametrize("kind", ["pretrained", "matched"])
+def test_learned_policy_schedules(tmp_path: Path, kind: str) -> None:
+    """The shipped generalist serves as LoRR's scheduler through the same interface,
+    robot by robot or matched (the whole timestep from one network call)."""
     pytest.importorskip("torch")
     problem = _tiny(tmp_path)
-    scheduler = _scheduler(problem, "pretrained", source="generalist_plus")
+    scheduler = _scheduler(problem, kind, source="generalist_plus", candidates=4)
     lorr = _play(problem, scheduler, 60)
     assert lorr.errors == []
     assert lorr.finished >= 10
+    assert type(scheduler.policy).__name__ == (
+        "MatchedPolicy" if kind == "matched" else "NetworkPolicy"
+    )
 
 
 def test_mpdm_takes_the_nearest_open_task(tmp_path: Path) -> None:

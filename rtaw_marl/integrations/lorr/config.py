@@ -31,9 +31,14 @@ class LoRRConfig:
             ``builtin:random_32_32_20_100.json``, the one shipped with the package.
         policy: Schedulers, one ``lifelong`` run each: ``lorr_default`` (the kit's own),
             any rule of ``rtaw-eval`` but ``hindsight`` (``mpdm``, ``lookahead``,
-            ``batch``, ...), ``checkpoint`` and ``pretrained``.
+            ``batch``, ...), ``checkpoint``, ``pretrained`` and ``matched``.
         checkpoint: Checkpoint path(s) when ``policy`` includes ``checkpoint``.
         pretrained: Shipped policy name(s) when ``policy`` includes ``pretrained``.
+        matched: Learned policies (checkpoint paths or shipped names, one or a list)
+            deciding every free robot of a timestep at once, when ``policy`` includes
+            ``matched``: one network call, then a greedy matching on its
+            log-probabilities (:mod:`rtaw_marl.policies.matched`; needs ``candidates``);
+            labelled ``<name>@k<K>+matched``.
         candidates: Learned policies score only the ``K`` nearest queued tasks.
         baselines: Parameters of the rules.
         timesteps: LoRR's ``simulationTime`` (its competition runs 5,000).
@@ -59,6 +64,7 @@ class LoRRConfig:
     policy: Any = field(default_factory=lambda: [LORR_DEFAULT, "mpdm"])
     checkpoint: Any = None
     pretrained: Any = None
+    matched: Any = None
     candidates: int | None = None
     baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
     timesteps: int = 500

@@ -42,7 +42,7 @@ class RunSpec:
 
     Attributes:
         problem: The LoRR problem JSON (the mirror simulator is built on its map).
-        policy: A rule's name, ``checkpoint`` / ``pretrained`` with ``source``, or a
+        policy: A rule's name, ``checkpoint`` / ``pretrained`` / ``matched`` with ``source``, or a
             user policy ``module:Name`` (imported from ``search_path``).
         source: The checkpoint path or shipped name of a learned policy.
         candidates: ``candidates=K`` of a learned policy.
@@ -106,10 +106,14 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler | PairScheduler:
             sys.path.append(spec.search_path)
         _, user_policy = import_policy(spec.policy)
         return PolicyScheduler(user_policy, sim, seed=spec.seed)
-    if spec.policy in ("checkpoint", "pretrained"):
+    if spec.policy in ("checkpoint", "pretrained", "matched"):
         from rtaw_marl.policies.network import load_policy
 
         policy: Any = load_policy(str(spec.source), candidates=spec.candidates)
+        if spec.policy == "matched":
+            from rtaw_marl.policies.matched import MatchedPolicy
+
+            policy = MatchedPolicy(policy)
     else:
         policy = make_baseline(spec.policy, params=BaselinesConfig(**spec.baselines))
     return PolicyScheduler(policy, sim, seed=spec.seed)
