@@ -60,6 +60,11 @@ class QueueDistances:
         self._fleet = np.zeros((num_robots, n), dtype=np.float64)
         self._chain = np.zeros((n, n), dtype=np.float64)
         self._nearest = np.zeros(n, dtype=np.float64)
+        # The nearest other origin of single slots (nearest_of), kept per slot with the
+        # slot that attains it, valid until that slot or the slot itself changes.
+        self._near = np.full(n, np.inf)
+        self._near_arg = np.full(n, -1, dtype=np.int64)
+        self._near_ok = np.zeros(n, dtype=bool)
         self.clear()
 
     def clear(self) -> None:
@@ -68,6 +73,8 @@ class QueueDistances:
         self._moved: list[int] = []
         self._changed: list[int] = []
         self._chain_changed: list[int] = []
+        self._near_changed: list[int] = []
+        self._near_ok[:] = False
 
     def robot_moved(self, robot: int) -> None:
         """Robot ``robot``'s free cell changed."""
@@ -77,6 +84,7 @@ class QueueDistances:
         """Slot ``slot``'s origin target or destination row changed."""
         self._changed.append(slot)
         self._chain_changed.append(slot)
+        self._near_changed.append(slot)
 
     def fleet(self, robot_xy: np.ndarray) -> np.ndarray:
         """Distances ``float64 [M, N]`` from each robot's cell ``robot_xy int [M, 2]`` to
@@ -105,6 +113,47 @@ class QueueDistances:
         self._chain_changed.clear()
         nearest_other_origin(self._chain, queue_mask, self._nearest)
         return self._nearest
+
+    def nearest_of(
+        self, slots: np.ndarray, queue_rows: np.ndarray, queue_mask: np.ndarray
+    ) -> np.ndarray:
+        """``float64 [K]``: :meth:`chain_nearest` of the slots ``slots int [K]`` only,
+        without the ``[N, N]`` chain: each slot's value is kept with the slot attaining
+        it and recomputed (its destination against every origin) only when the slot
+        or that one changed; slots queued since are checked against the kept values
+        (their origins against the kept destinations). Equal to a fresh computation
+        (the tests compare them along episodes)."""
+        self._near_update(queue_rows, queue_mask)
+        slots = np.asarray(slots, dtype=np.int64)
+        need = np.unique(slots[~self._near_ok[slots] & queue_mask[slots]])
+        if len(need):
+            chain = self._slots.distances_from(queue_rows[need, 2:])  # [R, N]
+            other = np.broadcast_to(queue_mask, chain.shape).copy()
+            other[np.arange(len(need)), need] = False
+            chain = np.where(other, chain, np.inf)
+            arg = chain.argmin(axis=1)
+            self._near[need] = chain[np.arange(len(need)), arg]
+            self._near_arg[need] = np.where(np.isfinite(self._near[need]), arg, -1)
+            self._near_ok[need] = True
+        return np.where(queue_mask[slots], self._near[slots], np.inf)
+
+    def _near_update(self, queue_rows: np.ndarray, queue_mask: np.ndarray) -> None:
+        """Apply the slot changes since the last :meth:`nearest_of` to the kept values."""
+        if not self._near_changed:
+            return
+        changed = _ids(self._near_changed)
+        self._near_changed.clear()
+        self._near_ok[changed] = False
+        self._near_ok &= ~np.isin(self._near_arg, changed)  # their nearest origin left
+        added = np.unique(changed[queue_mask[changed]])
+        live = np.flatnonzero(self._near_ok & queue_mask)
+        if len(added) and len(live):
+            d = self._slots.distances_from(queue_rows[live, 2:], added)  # [L, A]
+            best = d.argmin(axis=1)
+            value = d[np.arange(len(live)), best]
+            closer = value < self._near[live]
+            self._near[live[closer]] = value[closer]
+            self._near_arg[live[closer]] = added[best[closer]]
 
 
 def _ids(values: list[int]) -> np.ndarray:
