@@ -16,6 +16,13 @@ Keys (batch size ``[B]``):
 * ``"action"`` int64 ``[B]``: the chosen slot. A non-integer tensor, or a slot out of
   range or empty, raises :class:`~rtaw_marl.errors.InvalidActionError` naming the
   simulator, before any simulator steps.
+* With ``candidates=K`` (fewer than ``N`` slots): each decision holds only the ``K``
+  queued tasks whose origins are nearest the free robot
+  (:func:`~rtaw_marl.decision.features.candidate_slots`, the slots a
+  ``NetworkPolicy(candidates=K)`` scores), ``N`` is ``K`` in every key above, and the
+  action is an index into them (:attr:`BatchedWarehouseEnv.candidate_slots` maps it to
+  the slot). LoRR's windows hold ``1.5 M`` tasks: without it, the network's attention
+  over all of them is ``[B, H, N, N]``.
 * ``("next", "reward")`` float32 ``[B, 1]``: minus the chosen task's TTD (or the
   ablation reward), unscaled.
 * ``"done"``, ``"terminated"``, ``"truncated"`` bool ``[B, 1]``: ``drain`` episodes
@@ -65,6 +72,7 @@ from rtaw_marl.decision.features import (
     OBSERVATION_KEYS,
     RELATIONAL_KEYS,
     Decision,
+    candidate_slots,
     decision_features,
     feature_shapes,
 )
@@ -110,16 +118,28 @@ class BatchedWarehouseEnv(EnvBase):
             :data:`~rtaw_marl.decision.features.FEATURES`. A trainer asks for what its
             networks read: RTAW+ with ``model.fleet_summary`` needs no ``[B, M, ...]``
             entry, so neither the env's cost nor a batch's size grows with ``M``.
+        candidates: ``K``: each decision holds the ``K`` nearest queued tasks only (the
+            module docstring); ``None`` (or ``K >= N``): every slot.
 
     Raises:
-        ConfigError: ``num_envs < 1``, or an unknown key (the message lists them).
+        ConfigError: ``num_envs < 1``, ``candidates < 1``, or an unknown key (the
+            message lists them).
     """
 
     def __init__(
-        self, spec: SimSpec, num_envs: int, seed: int = 0, keys: Iterable[str] = FEATURES
+        self,
+        spec: SimSpec,
+        num_envs: int,
+        seed: int = 0,
+        keys: Iterable[str] = FEATURES,
+        candidates: int | None = None,
     ) -> None:
         if int(num_envs) < 1:
             raise ConfigError(f"num_envs must be >= 1, got {num_envs}")
+        if candidates is not None and (
+            isinstance(candidates, bool) or not isinstance(candidates, int) or candidates < 1
+        ):
+            raise ConfigError(f"candidates must be an integer >= 1 or None, got {candidates!r}")
         self.keys = tuple(k for k in dict.fromkeys(keys) if k != "action_mask")
         if unknown := [k for k in self.keys if k not in ALL_KEYS]:
             raise ConfigError(f"unknown observation key(s) {unknown}; valid: {', '.join(ALL_KEYS)}")
@@ -133,6 +153,12 @@ class BatchedWarehouseEnv(EnvBase):
         b, m, n = int(num_envs), spec.sim.num_robots, spec.sim.queue_len
         self.num_envs, self.num_robots, self.queue_len = b, m, n
         self.scale = factory.layout.scale
+        #: ``K`` when decisions hold candidates only, else ``None``.
+        self.candidates = candidates if candidates is not None and candidates < n else None
+        w = n if self.candidates is None else self.candidates
+        #: ``int64 [B, K]``: the slot of each action index (``arange(N)`` without
+        #: ``candidates``).
+        self.candidate_slots = np.broadcast_to(np.arange(w), (b, w)).copy()
         self._robot_xy = np.zeros((b, m, 2), dtype=np.int64)
         self._free_at = np.zeros((b, m), dtype=np.float64)
         self._mask = np.zeros((b, n), dtype=bool)
@@ -140,10 +166,10 @@ class BatchedWarehouseEnv(EnvBase):
         self._length = np.zeros((b, n), dtype=np.float64)
         self._time = np.zeros(b, dtype=np.float64)
         self._robot = np.zeros(b, dtype=np.int64)
-        self._dist = np.zeros((b, n), dtype=np.float64)
-        self._all_dist = np.zeros((b, m, n), dtype=np.float64)
-        self._nearest = np.zeros((b, n), dtype=np.float64)
-        self._wait = np.zeros((b, n), dtype=np.float64)
+        self._dist = np.zeros((b, w), dtype=np.float64)
+        self._all_dist = np.zeros((b, m, w), dtype=np.float64)
+        self._nearest = np.zeros((b, w), dtype=np.float64)
+        self._wait = np.zeros((b, w), dtype=np.float64)
         self.sims = [
             factory(
                 SimBuffers(
@@ -158,7 +184,7 @@ class BatchedWarehouseEnv(EnvBase):
         ]
         self.episode_seeds = np.zeros(b, dtype=np.int64)
         self._set_seed(seed)
-        set_batch_specs(self, self.keys, b, m, n)
+        set_batch_specs(self, self.keys, b, m, w)
 
     # ------------------------------------------------------------------ seeding
     def _set_seed(self, seed: int | None) -> None:
@@ -224,18 +250,20 @@ class BatchedWarehouseEnv(EnvBase):
             raise InvalidActionError(
                 f"action must hold {self.num_envs} slots, got shape {tuple(action.shape)}"
             )
-        slots = action.reshape(self.num_envs).numpy()
-        in_range = (slots >= 0) & (slots < self.queue_len)
-        legal = in_range & self._mask[np.arange(self.num_envs), np.where(in_range, slots, 0)]
+        index = action.reshape(self.num_envs).numpy()
+        width = self.candidate_slots.shape[1]
+        in_range = (index >= 0) & (index < width)
+        rows = np.arange(self.num_envs)
+        slots = self.candidate_slots[rows, np.where(in_range, index, 0)]
+        legal = in_range & self._mask[rows, slots]
         legal |= np.array([sim.done for sim in self.sims])  # ignored (see _step)
         if not legal.all():
             i = int(np.flatnonzero(~legal)[0])
+            what = "queue slot" if self.candidates is None else "candidate"
             problem = (
-                f"is not a queue slot (0..{self.queue_len - 1})"
-                if not in_range[i]
-                else "names an empty queue slot"
+                f"is not a {what} (0..{width - 1})" if not in_range[i] else f"names an empty {what}"
             )
-            raise InvalidActionError(f"simulator {i}: action {int(slots[i])} {problem}")
+            raise InvalidActionError(f"simulator {i}: action {int(index[i])} {problem}")
         return slots.tolist()
 
     def reset_to(self, seeds: list[int] | np.ndarray) -> TensorDictBase:
@@ -271,6 +299,9 @@ class BatchedWarehouseEnv(EnvBase):
         sim = self.sims[i]
         self._time[i] = sim.time
         self._robot[i] = sim.robot
+        if self.candidates is not None:
+            self._sync_candidates(i)
+            return
         if self._own:
             self._dist[i] = sim.robot_distances()
         if self._relational:
@@ -279,11 +310,31 @@ class BatchedWarehouseEnv(EnvBase):
             self._nearest[i] = sim.chain_nearest(copy=False)
             self._wait[i] = sim.queue_waits()
 
+    def _sync_candidates(self, i: int) -> None:
+        """Simulator ``i``'s candidates (NetworkPolicy's key: distance / L in float32)
+        and their distances."""
+        sim = self.sims[i]
+        own = sim.robot_distances()
+        key = (own / self.scale).astype(np.float32)
+        slots = candidate_slots(key, sim.queue_mask, self.candidates)
+        self.candidate_slots[i] = slots
+        self._dist[i] = own[slots]
+        if self._relational:
+            self._all_dist[i] = sim.distance_matrix(slots)
+            self._nearest[i] = sim.chain_nearest(slots)
+            self._wait[i] = sim.queue_waits()[slots]
+
     def _observation(self) -> TensorDict:
+        rows, length, mask = self._rows, self._length, self._mask
+        if self.candidates is not None:
+            slots = self.candidate_slots
+            rows = np.take_along_axis(rows, slots[..., None], axis=1)
+            length = np.take_along_axis(length, slots, axis=1)
+            mask = np.take_along_axis(mask, slots, axis=1)
         decision = Decision(
-            self._robot_xy, self._free_at, self._time, self._robot, self._rows, self._length,
-            self._mask, self.scale, own_distances=self._dist, distances=self._all_dist,
-            waits=self._wait, nearest=self._nearest,
+            self._robot_xy, self._free_at, self._time, self._robot, rows, length, mask,
+            self.scale, own_distances=self._dist, distances=self._all_dist, waits=self._wait,
+            nearest=self._nearest,
         )  # fmt: skip
         features = decision_features(decision, self.keys)
         mask = torch.from_numpy(features["action_mask"])

@@ -140,7 +140,10 @@ def build_collector(
         if cfg.mix:
             share = col.envs_per_worker // len(cfg.mix)
             members = [(member, share) for member in mix_specs(cfg.mix)]
-        make_env = [partial(_worker_env, members, seed, threads, tuple(keys)) for seed in seeds]
+        make_env = [
+            partial(_worker_env, members, seed, threads, tuple(keys), cfg.candidates)
+            for seed in seeds
+        ]
     batch = cfg.algo.frames_per_batch
     remaining = max(cfg.frames - progress.frames, batch)
     kwargs = {"frames_per_batch": batch, "total_frames": -(-remaining // batch) * batch}
@@ -164,11 +167,13 @@ def _worker_env(
     seed: int,
     threads: int | None,
     keys: tuple[str, ...] = FEATURES,
+    candidates: int | None = None,
 ) -> BatchedWarehouseEnv | MixedBatchedEnv:
     """The batched env of one collector: ``count`` simulators of each ``(spec, count)``
-    member (one member: a :class:`BatchedWarehouseEnv`; a mix: a
-    :class:`MixedBatchedEnv`). A worker process or actor runs its policy on ``threads``
-    threads (torch's default, one per core, oversubscribes the cores the workers share).
+    member (one member: a :class:`BatchedWarehouseEnv`, each decision's ``candidates``
+    nearest tasks when set; a mix: a :class:`MixedBatchedEnv`). A worker process or
+    actor runs its policy on ``threads`` threads (torch's default, one per core,
+    oversubscribes the cores the workers share).
 
     Worker processes ignore Ctrl-C and SIGTERM: the terminal and schedulers signal the
     whole process group, and the main process alone must handle them (save, then shut
@@ -180,7 +185,7 @@ def _worker_env(
             for signum in STOP_SIGNALS:
                 signal.signal(signum, signal.SIG_IGN)
     if len(members) == 1:
-        return BatchedWarehouseEnv(*members[0], seed, keys)
+        return BatchedWarehouseEnv(*members[0], seed, keys, candidates)
     return MixedBatchedEnv(members, seed, keys)
 
 

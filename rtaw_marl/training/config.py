@@ -315,6 +315,11 @@ class TrainConfig(SimGroups):
             policy name (its weights only: the critic, the optimizer and the run's
             progress start fresh), e.g. a specialist continued on a mix. Its network must
             be this run's (``model.name``, ``embed_dim``, ``heads``); ignored on resume.
+        candidates: Train and select on each decision's ``K`` queued tasks nearest the
+            free robot (the network's inputs and actions; evaluate the checkpoint with
+            ``candidates=K``): LoRR's windows hold ``1.5 M`` tasks, too many for the
+            network's attention over all of them. ``None``: every queued task. Not with
+            ``mix``, ``interop`` or an imitation warm start.
     """
 
     model: Any
@@ -334,16 +339,30 @@ class TrainConfig(SimGroups):
     interop: bool = False
     mix: list[str] = field(default_factory=list)
     init_actor: str | None = None
+    candidates: int | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
         self._check_mix()
+        self._check_candidates()
         seed_value(self.seed, "seed")
         at_least(self, "", 1, "frames", "torch_threads")
         if self.device not in DEVICES:
             raise ConfigError(f"device must be one of {', '.join(DEVICES)}, got {self.device!r}")
         self.logger = logger_option(self.logger)
         self._check_budgets()
+
+    def _check_candidates(self) -> None:
+        if self.candidates is None:
+            return
+        at_least(self, "", 1, "candidates")
+        clash = [
+            key for key, on in (("mix", bool(self.mix)), ("interop", self.interop),
+                                ("imitation.teacher", self.imitation.teacher is not None))
+            if on
+        ]  # fmt: skip
+        if clash:
+            raise ConfigError(f"candidates= does not work with {clash[0]} yet; leave one out")
 
     def _check_mix(self) -> None:
         if not self.mix:

@@ -36,6 +36,7 @@ class Evaluator:
         seeds: Selection seeds (never the evaluation seeds 0-19).
         history: Evaluations of the run so far (on resume).
         keys: The observation entries the evaluated network reads (its ``in_keys``).
+        candidates: Decisions hold their ``K`` nearest tasks, as in training.
     """
 
     def __init__(
@@ -44,9 +45,10 @@ class Evaluator:
         seeds: list[int],
         history: list[dict[str, float]] | None = None,
         keys: Iterable[str] = FEATURES,
+        candidates: int | None = None,
     ) -> None:
         self.seeds = seeds
-        self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0, keys=keys)
+        self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0, keys=keys, candidates=candidates)
         rules = {"mpdm": MPDM(), "lookahead": make_baseline("lookahead")}
         ttd = {name: r["ttd"] for name, r in evaluate(build_sim(spec), rules, seeds).items()}
         self.mpdm_ttd = float(np.mean(ttd["mpdm"]))

@@ -208,7 +208,9 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     if cfg.resume:
         progress, history = resume(cfg, nets, learner.optim, run_dir)
         trim_csv_logs(run_dir / "logs", progress.frames)
-    evaluator = Evaluator(spec, [int(s) for s in cfg.selection.seeds], history, nets[0].in_keys)
+    evaluator = Evaluator(
+        spec, [int(s) for s in cfg.selection.seeds], history, nets[0].in_keys, cfg.candidates
+    )
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
     logger = build_logger(run_dir, cfg.logger, config=as_plain(cfg))

@@ -165,3 +165,41 @@ def test_bad_seeds_raise_config_errors(seed: object) -> None:
         env.reset_to([0, seed])
     with pytest.raises(ConfigError, match="seed must be an integer >= 0"):
         _env(num_envs=1, seed=seed)
+
+
+def test_candidates_hold_the_nearest_tasks_and_map_actions_to_slots() -> None:
+    """``candidates=K``: each decision's K nearest queued tasks, bit for bit the
+    observation a ``NetworkPolicy(candidates=K)`` scores, the action an index into them;
+    specs of width K; an index past K or on an empty candidate is refused."""
+    from rtaw_marl.decision.features import FEATURES, candidate_slots, sim_observation
+
+    spec = SimSpec.of(
+        {"num_robots": 6, "num_tasks": 60, "queue_len": 12}, "shelves", "astar", "random"
+    )
+    env = BatchedWarehouseEnv(spec, num_envs=2, seed=5, candidates=4)
+    check_env_specs(env)
+    assert env.observation_spec["relations"].shape == (2, 4, 8)
+    td = env.reset()
+    rng = np.random.default_rng(1)
+    for _ in range(40):
+        picks = []
+        for b, sim in enumerate(env.sims):
+            key = (sim.robot_distances() / sim.layout.scale).astype(np.float32)
+            slots = candidate_slots(key, sim.queue_mask, 4)
+            np.testing.assert_array_equal(env.candidate_slots[b], slots)
+            want = sim_observation(sim, FEATURES, slots)
+            for name in FEATURES:
+                np.testing.assert_array_equal(td[name][b].numpy(), want[name])
+            np.testing.assert_array_equal(td["action_mask"][b].numpy(), want["action_mask"])
+            picks.append(int(rng.choice(np.flatnonzero(want["action_mask"]))))
+        chosen = [int(env.candidate_slots[b, a]) for b, a in enumerate(picks)]
+        ids = [int(sim.queue_ids[s]) for sim, s in zip(env.sims, chosen, strict=True)]
+        td["action"] = torch.tensor(picks)
+        td = env.step(td)["next"]
+        for sim, task in zip(env.sims, ids, strict=True):
+            assert sim.done or sim.task_assigned[task] >= 0
+    td["action"] = torch.tensor([4, 0])
+    with pytest.raises(InvalidActionError, match="simulator 0: action 4 is not a candidate"):
+        env.step(td)
+    with pytest.raises(ConfigError, match="candidates must be an integer >= 1"):
+        BatchedWarehouseEnv(spec, num_envs=1, candidates=0)

@@ -61,3 +61,40 @@ def test_rtaw_train_on_a_lorr_problem_with_pibt(train_cfg, tmp_path: Path) -> No
     assert sim.executor.name == "pibt"
     results = evaluate(sim, {"rtaw": policy}, [0, 1])  # validates each schedule
     assert min(results["rtaw"]["tasks_finished"]) > 0
+
+
+def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) -> None:
+    """``candidates=K``: the run trains and selects on each decision's K nearest tasks
+    (batches of width K, not the window's), and the checkpoint evaluates with
+    ``candidates=K`` (the same slots, NetworkPolicy's)."""
+    problem = _tiny_lorr_problem(tmp_path)
+    overrides = ["scenario=lorr", f"tasks.problem={problem}", "sim.horizon=60",
+                 "frames=1024", "selection.every_frames=1024", "collector.envs_per_worker=4",
+                 "model=rtaw_plus", "candidates=2", "sim.reward=ttd_length"]  # fmt: skip
+    cfg = train_cfg(overrides)
+    assert cfg.sim.queue_len > 2
+    result = train(cfg, tmp_path / "run")
+    assert result.frames == 1024
+    assert all(np.isfinite(row["ttd"]) for row in result.history)
+    policy = load_policy(str(result.last_checkpoint), candidates=2)
+    sim = build_sim(lorr_scenario(problem, horizon=60).spec())
+    results = evaluate(sim, {"rtaw": policy}, [0])
+    assert min(results["rtaw"]["tasks_finished"]) > 0
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["candidates=0"], "candidates must be >= 1"),
+        (["candidates=4", "imitation.teacher=lookahead"], "does not work with imitation"),
+        (["candidates=4", "interop=true"], "does not work with interop"),
+    ],
+)
+def test_bad_candidates_are_one_line(extra: list[str], message: str, cli, tmp_path) -> None:
+    result = cli(
+        "train", "scenario=poc", "frames=1024", "algo=ppo_paper", f"output_dir={tmp_path}",
+        "progress=false", *extra,
+    )  # fmt: skip
+    assert result.code == 2
+    assert message in result.err
+    assert "Traceback" not in result.err + result.out
