@@ -25,11 +25,19 @@ def run(cfg: DictConfig | TrainConfig) -> None:
 
     run_dir = Path(cfg.output_dir or HydraConfig.get().runtime.output_dir)
     result = train(cfg, run_dir)
-    gap = 100.0 * (result.mpdm_ttd - result.best_ttd) / result.mpdm_ttd
-    print(
-        f"best greedy TTD {result.best_ttd:.2f} vs MPDM {result.mpdm_ttd:.2f} "
-        f"({gap:+.1f}%) after {result.frames} frames"
-    )
+    if cfg.selection.metric == "tasks_finished":
+        best = min(result.history, key=lambda r: (-r["tasks_finished"], r["frames"]))
+        tasks, mpdm = best["tasks_finished"], best["mpdm_tasks_finished"]
+        print(
+            f"best greedy tasks finished {tasks:.1f} vs MPDM {mpdm:.1f} "
+            f"({100.0 * (tasks - mpdm) / mpdm:+.1f}%) after {result.frames} frames"
+        )
+    else:
+        gap = 100.0 * (result.mpdm_ttd - result.best_ttd) / result.mpdm_ttd
+        print(
+            f"best greedy TTD {result.best_ttd:.2f} vs MPDM {result.mpdm_ttd:.2f} "
+            f"({gap:+.1f}%) after {result.frames} frames"
+        )
     print(f"checkpoints: {result.best_checkpoint} {result.last_checkpoint}")
 
 

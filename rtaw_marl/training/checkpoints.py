@@ -47,6 +47,7 @@ __all__ = [
     "check_training_payload",
     "clean_interrupted_writes",
     "resume",
+    "score",
     "top_name",
     "trim_csv_logs",
 ]
@@ -61,7 +62,14 @@ class Progress:
 
     frames: int = 0
     iteration: int = 0
-    best_ttd: float = float("inf")
+    #: The best evaluation's selection score so far (lower is better: its mean TTD, or
+    #: minus its mean tasks finished with ``selection.metric=tasks_finished``).
+    best_score: float = float("inf")
+
+
+def score(row: dict[str, float]) -> float:
+    """An evaluation row's selection score (rows stored before ``score``: their TTD)."""
+    return float(row.get("score", row["ttd"]))
 
 
 class Checkpoints:
@@ -73,7 +81,7 @@ class Checkpoints:
         folder: ``<run_dir>/checkpoints``.
         nets: The actor and critic networks.
         optim: Their optimizer.
-        progress: The run's progress (frames, iteration, best TTD).
+        progress: The run's progress (frames, iteration, best selection score).
     """
 
     def __init__(
@@ -91,9 +99,9 @@ class Checkpoints:
         """Write the checkpoints after the evaluation ``row``, with every evaluation so
         far (so a resumed run draws its whole curve)."""
         # Strictly better only: a tie or a worse row never replaces the best on disk.
-        better = row["ttd"] < self.progress.best_ttd
+        better = score(row) < self.progress.best_score
         if better:
-            self.progress.best_ttd = row["ttd"]
+            self.progress.best_score = score(row)
         payload = self._payload(row, history)
         if better:
             save_checkpoint(self.best, payload)
@@ -105,7 +113,7 @@ class Checkpoints:
         """``top/<frames>.pt`` for the ``selection.keep`` best evaluations of ``history`` (ties:
         the earlier), weights only; a file that drops out of them is removed. Decided
         from the history alone, so a resumed run keeps the same files."""
-        top = sorted(history, key=lambda r: (r["ttd"], r["frames"]))[: self.cfg.selection.keep]
+        top = sorted(history, key=lambda r: (score(r), r["frames"]))[: self.cfg.selection.keep]
         kept = {top_name(int(r["frames"])) for r in top}
         folder = self.last.parent / "top"
         name = top_name(self.progress.frames)
@@ -133,7 +141,7 @@ class Checkpoints:
             "config": as_plain(self.cfg),
             "frames": progress.frames,
             "iteration": progress.iteration,
-            "best_ttd": progress.best_ttd,
+            "best_ttd": progress.best_score,  # the selection score (stored name kept)
             "eval": row,  # the evaluation's own row (its TTDs), not the selection config
             "history": list(history),
         }
@@ -202,9 +210,9 @@ def resume(
     progress = Progress(frames, ckpt["iteration"], float(ckpt["best_ttd"]))
     history = list(ckpt.get("history", []))
     if changes:
-        progress.best_ttd, history = float("inf"), []
+        progress.best_score, history = float("inf"), []
     else:
-        progress.best_ttd = _best_on_disk(path, run_dir)
+        progress.best_score = _best_on_disk(path, run_dir)
     torch.manual_seed(cfg.seed + progress.iteration)
     return progress, history
 
@@ -233,7 +241,7 @@ def _newest(path: Path) -> tuple[Path, dict[str, Any]]:
 
 
 def _best_on_disk(source: Path, run_dir: Path) -> float:
-    """The TTD a new ``best.pt`` must beat: that of the run folder's ``best.pt`` (brought
+    """The score a new ``best.pt`` must beat: that of the run folder's ``best.pt`` (brought
     from ``source``'s folder when resuming into a new one), or infinity without one."""
     best = run_dir / "checkpoints" / "best.pt"
     sibling = source.parent / "best.pt"
@@ -244,10 +252,11 @@ def _best_on_disk(source: Path, run_dir: Path) -> float:
     if not best.exists():
         return float("inf")
     ckpt = load_checkpoint(best)
-    ttd = ckpt.get("eval", {}).get("ttd", ckpt.get("best_ttd"))
-    if not _number(ttd):
-        raise ConfigError(f"resume: {best} records no evaluation TTD to compare with")
-    return float(ttd)
+    row = ckpt.get("eval", {})
+    value = row.get("score", row.get("ttd", ckpt.get("best_ttd")))
+    if not _number(value):
+        raise ConfigError(f"resume: {best} records no evaluation score to compare with")
+    return float(value)
 
 
 def _count(value: object) -> bool:

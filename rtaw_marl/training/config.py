@@ -158,6 +158,10 @@ class CollectorConfig:
             )
 
 
+#: What ``selection.metric`` may select on.
+SELECTION_METRICS = ("ttd", "tasks_finished")
+
+
 @dataclass(kw_only=True)
 class SelectionConfig:
     """Greedy evaluation during training on the selection seeds, which picks ``best.pt``
@@ -172,15 +176,24 @@ class SelectionConfig:
             ``checkpoints/top/<frames>.pt``: the candidates of a second selection stage
             on fresh selection seeds (:mod:`rtaw_marl.training.selection`), which picks
             among them without the first stage's winner's curse. 1: ``best.pt`` alone.
+        metric: What picks the checkpoints: ``ttd`` (least mean TTD: the paper's
+            objective) or ``tasks_finished`` (most tasks finished: LoRR's, for horizon
+            episodes, where a policy that finishes more tasks also travels more).
     """
 
     every_frames: int = 204_800
     seeds: list[int] = field(default_factory=lambda: list(range(1000, 1010)))
     keep: int = 1
+    metric: str = "ttd"
 
     def __post_init__(self) -> None:
         check_fields(self, "selection.")
         at_least(self, "selection.", 1, "every_frames", "keep")
+        if self.metric not in SELECTION_METRICS:
+            raise ConfigError(
+                f"selection.metric must be one of {', '.join(SELECTION_METRICS)}, "
+                f"got {self.metric!r}"
+            )
         if not self.seeds:
             raise ConfigError("selection.seeds must name at least one seed")
         low = [s for s in seed_list(self.seeds, "selection.seeds") if s < SELECTION_SEEDS]

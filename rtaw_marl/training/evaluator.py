@@ -37,6 +37,8 @@ class Evaluator:
         history: Evaluations of the run so far (on resume).
         keys: The observation entries the evaluated network reads (its ``in_keys``).
         candidates: Decisions hold their ``K`` nearest tasks, as in training.
+        metric: ``selection.metric``: each row's ``score`` (lower is better) is its mean
+            TTD, or minus its mean tasks finished.
     """
 
     def __init__(
@@ -46,18 +48,21 @@ class Evaluator:
         history: list[dict[str, float]] | None = None,
         keys: Iterable[str] = FEATURES,
         candidates: int | None = None,
+        metric: str = "ttd",
     ) -> None:
-        self.seeds = seeds
+        self.seeds, self.metric = seeds, metric
         self.env = BatchedWarehouseEnv(spec, len(seeds), seed=0, keys=keys, candidates=candidates)
         rules = {"mpdm": MPDM(), "lookahead": make_baseline("lookahead")}
-        ttd = {name: r["ttd"] for name, r in evaluate(build_sim(spec), rules, seeds).items()}
+        results = evaluate(build_sim(spec), rules, seeds)
+        ttd = {name: r["ttd"] for name, r in results.items()}
         self.mpdm_ttd = float(np.mean(ttd["mpdm"]))
+        self.mpdm_tasks = float(np.mean(results["mpdm"]["tasks_finished"]))
         # The strongest online rule, so that every curve shows the bar to clear.
         self.lookahead_ttd = float(np.mean(ttd["lookahead"]))
         self.history: list[dict[str, float]] = list(history or [])
 
     def run(self, net: Actor, progress: Progress, wall_s: float) -> dict[str, float]:
-        """Evaluate ``net`` and return the logged row (``progress.best_ttd`` is left to
+        """Evaluate ``net`` and return the logged row (``progress.best_score`` is left to
         :class:`~rtaw_marl.training.checkpoints.Checkpoints`, which keeps the best)."""
         ttd = float(np.mean(greedy_ttd(net, self.env, self.seeds)))
         row = {
@@ -66,8 +71,13 @@ class Evaluator:
             "mpdm_ttd": self.mpdm_ttd,
             "lookahead_ttd": self.lookahead_ttd,
             "improvement_pct": 100.0 * (self.mpdm_ttd - ttd) / self.mpdm_ttd,
+            "score": ttd,
             "wall_s": wall_s,
         }
+        if self.metric == "tasks_finished":
+            # The episodes greedy_ttd just played, still in the env's simulators.
+            tasks = float(np.mean([sim.metrics().tasks_finished for sim in self.env.sims]))
+            row.update(tasks_finished=tasks, mpdm_tasks_finished=self.mpdm_tasks, score=-tasks)
         self.history.append(row)
         return row
 

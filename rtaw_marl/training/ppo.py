@@ -40,6 +40,7 @@ from rtaw_marl.training.checkpoints import (
     Progress,
     clean_interrupted_writes,
     resume,
+    score,
     trim_csv_logs,
 )
 from rtaw_marl.training.collectors import build_collector, learner_device
@@ -71,6 +72,7 @@ class TrainResult:
     best_checkpoint: Path
     frames: int
     mpdm_ttd: float
+    #: The TTD of the selected (best) evaluation.
     best_ttd: float
     history: list[dict[str, float]] = field(default_factory=list)
     #: Seconds spent per phase over the run (``time/collect_s``, ``time/update_s``, ...).
@@ -209,8 +211,9 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
         progress, history = resume(cfg, nets, learner.optim, run_dir)
         trim_csv_logs(run_dir / "logs", progress.frames)
     evaluator = Evaluator(
-        spec, [int(s) for s in cfg.selection.seeds], history, nets[0].in_keys, cfg.candidates
-    )
+        spec, [int(s) for s in cfg.selection.seeds], history, nets[0].in_keys, cfg.candidates,
+        cfg.selection.metric,
+    )  # fmt: skip
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
     logger = build_logger(run_dir, cfg.logger, config=as_plain(cfg))
@@ -238,7 +241,13 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
         began = time.perf_counter()
         row = evaluator.run(_on_cpu(learner.actor_net), progress, began - start)
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
-        postfix.update(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
+        if cfg.selection.metric == "tasks_finished":
+            postfix.update(
+                eval_tasks=f"{row['tasks_finished']:.0f}",
+                mpdm_tasks=f"{row['mpdm_tasks_finished']:.0f}",
+            )
+        else:
+            postfix.update(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
         bar.set_postfix(postfix)
         saver.save(row, evaluator.history)
         eval_s.append(time.perf_counter() - began)
@@ -287,9 +296,10 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     if stop.requested:
         raise Interrupted(_interrupted(saver, evaluator.history), stop.signum or signal.SIGINT)
     plot_training_curve(evaluator.history, run_dir / "training_curve.png")
+    best = min(evaluator.history, key=lambda r: (score(r), r["frames"]))
     return TrainResult(
         run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
-        progress.best_ttd, evaluator.history, totals,
+        best["ttd"], evaluator.history, totals,
     )  # fmt: skip
 
 

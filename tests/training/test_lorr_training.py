@@ -69,13 +69,22 @@ def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) ->
     ``candidates=K`` (the same slots, NetworkPolicy's)."""
     problem = _tiny_lorr_problem(tmp_path)
     overrides = ["scenario=lorr", f"tasks.problem={problem}", "sim.horizon=60",
-                 "frames=1024", "selection.every_frames=1024", "collector.envs_per_worker=4",
-                 "model=rtaw_plus", "candidates=2", "sim.reward=ttd_length"]  # fmt: skip
+                 "frames=1024", "collector.envs_per_worker=4",
+                 "model=rtaw_plus", "candidates=2", "sim.reward=ttd_length",
+                 "selection.metric=tasks_finished", "selection.every_frames=512"]  # fmt: skip
     cfg = train_cfg(overrides)
     assert cfg.sim.queue_len > 2
     result = train(cfg, tmp_path / "run")
     assert result.frames == 1024
     assert all(np.isfinite(row["ttd"]) for row in result.history)
+    # Selected on tasks finished: the best row has the most (the earliest on ties).
+    rows = result.history
+    assert all(row["score"] == -row["tasks_finished"] for row in rows)
+    best = torch.load(result.best_checkpoint, weights_only=False)
+    assert best["eval"]["tasks_finished"] == max(row["tasks_finished"] for row in rows)
+    assert best["eval"]["frames"] == min(
+        r["frames"] for r in rows if r["tasks_finished"] == best["eval"]["tasks_finished"]
+    )
     policy = load_policy(str(result.last_checkpoint), candidates=2)
     sim = build_sim(lorr_scenario(problem, horizon=60).spec())
     results = evaluate(sim, {"rtaw": policy}, [0])
@@ -88,9 +97,12 @@ def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) ->
         (["candidates=0"], "candidates must be >= 1"),
         (["candidates=4", "imitation.teacher=lookahead"], "does not work with imitation"),
         (["candidates=4", "interop=true"], "does not work with interop"),
+        (["selection.metric=tasks"], "selection.metric must be one of ttd, tasks_finished"),
     ],
 )
-def test_bad_candidates_are_one_line(extra: list[str], message: str, cli, tmp_path) -> None:
+def test_bad_candidates_or_metric_are_one_line(
+    extra: list[str], message: str, cli, tmp_path
+) -> None:
     result = cli(
         "train", "scenario=poc", "frames=1024", "algo=ppo_paper", f"output_dir={tmp_path}",
         "progress=false", *extra,
