@@ -15,9 +15,11 @@ decides them together, at the first decision of each timestep:
    and task at most once: :func:`~rtaw_marl.policies.pairs.greedy_pairs`) turns the
    scores into tasks, so two robots never both want the nearest task of both.
 
-The robots then take their matches as the simulator selects them. A robot that was not
-free at the timestep's first decision, or whose candidates all went to others, decides
-alone, as the wrapped policy does. Decisions are deterministic.
+The robots then take their matches as the simulator selects them. A timestep that frees
+more than :data:`BATCH` robots is matched a batch at a time (each call bounded, so
+LoRR's clock can stop between them). A robot whose candidates all went to others, or
+whose match was taken meanwhile, decides alone, as the wrapped policy does. Decisions
+are deterministic.
 """
 
 from __future__ import annotations
@@ -41,7 +43,12 @@ from rtaw_marl.policies.network import NetworkPolicy
 from rtaw_marl.policies.pairs import greedy_pairs
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["MatchedPolicy", "nearest_slots"]
+__all__ = ["BATCH", "MatchedPolicy", "nearest_slots"]
+
+#: Robots matched by one network call: a timestep that frees more (every robot at
+#: t = 0) is matched a batch at a time, so one call stays within a fraction of LoRR's
+#: clock and the robots left over can wait.
+BATCH = 32
 
 #: Cost of a pair outside a robot's candidates: above any ``-log p`` a float32 softmax
 #: gives (``-log`` of the smallest positive float32 is about 104), so never preferred.
@@ -76,23 +83,36 @@ class MatchedPolicy:
         """Forget the timestep's matching (greedy decisions: the seed is unused)."""
         del seed
         self._plan: tuple[tuple[int, float], dict[int, tuple[int, int]]] | None = None
+        self._asked: set[int] = set()
 
     def act_sim(self, sim: WarehouseSim) -> int:
-        """The selected robot's match (the timestep's matching is made at its first
-        decision), or its own decision when it has none."""
+        """The selected robot's match, or its own decision when it has none.
+
+        The first robot of a timestep without a match so far is matched with the next
+        :data:`BATCH` free robots not yet matched (itself first, then by id)."""
         key = (id(sim), sim.time)
         if self._plan is None or self._plan[0] != key:
-            self._plan = (key, self.match(sim))
-        planned = self._plan[1].get(sim.robot)
+            self._plan, self._asked = (key, {}), set()
+        plan = self._plan[1]
+        if sim.robot not in self._asked:
+            free = [r for r in sim.free_robots().tolist() if r not in self._asked]
+            free.remove(sim.robot)
+            robots = np.array([sim.robot, *free[: BATCH - 1]], dtype=np.int64)
+            self._asked.update(robots.tolist())
+            plan.update(self.match(sim, robots))
+        planned = plan.get(sim.robot)
         if planned is not None:
             slot, task = planned
             if sim.queue_ids[slot] == task and sim.queue_mask[slot]:
                 return slot
         return self.policy.act_sim(sim)
 
-    def match(self, sim: WarehouseSim) -> dict[int, tuple[int, int]]:
-        """Robot -> ``(slot, task)`` for the robots free now, from one network call."""
-        robots = sim.free_robots()
+    def match(
+        self, sim: WarehouseSim, robots: np.ndarray | None = None
+    ) -> dict[int, tuple[int, int]]:
+        """Robot -> ``(slot, task)`` for ``robots int [R]`` (default: every robot free
+        now), from one network call."""
+        robots = sim.free_robots() if robots is None else np.asarray(robots, dtype=np.int64)
         if not sim.queue_mask.any():
             return {}
         slots, logp = self.scores(sim, robots)

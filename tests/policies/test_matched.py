@@ -140,3 +140,33 @@ def test_nearest_slots_pick_what_candidate_slots_picks() -> None:
         got = nearest_slots(key, k)
         for row, want in zip(got, key, strict=True):
             np.testing.assert_array_equal(row, candidate_slots(want, np.isfinite(want), k))
+
+
+def test_a_crowded_timestep_is_matched_a_batch_at_a_time(
+    network: NetworkPolicy, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """At t = 0 every robot is free: each network call matches at most ``BATCH`` of
+    them (the selected robot first), every robot is matched once per timestep, and the
+    decisions stay legal."""
+    import rtaw_marl.policies.matched as matched
+
+    monkeypatch.setattr(matched, "BATCH", 8)
+    sim, policy = _sim(horizon=30), MatchedPolicy(network)
+    calls: list[list[int]] = []
+    match = policy.match
+
+    def spy(sim: WarehouseSim, robots: np.ndarray) -> dict[int, tuple[int, int]]:
+        calls.append([sim.robot, *np.asarray(robots).tolist()])
+        return match(sim, robots)
+
+    policy.match = spy  # type: ignore[method-assign]
+    sim.reset(1)
+    policy.reset(1)
+    while sim.time == 0:
+        slot = policy.act_sim(sim)
+        assert sim.queue_mask[slot]
+        sim.step(slot)
+    assert len(calls) >= sim.num_robots // 8
+    assert all(len(c) <= 9 and c[0] == c[1] for c in calls)  # the selected robot first
+    matched_robots = [r for c in calls for r in c[1:]]
+    assert len(matched_robots) == len(set(matched_robots))
