@@ -26,8 +26,7 @@ def run(cfg: DictConfig | TrainConfig) -> None:
     run_dir = Path(cfg.output_dir or HydraConfig.get().runtime.output_dir)
     result = train(cfg, run_dir)
     if cfg.selection.metric == "tasks_finished":
-        best = min(result.history, key=lambda r: (-r["tasks_finished"], r["frames"]))
-        tasks, mpdm = best["tasks_finished"], best["mpdm_tasks_finished"]
+        tasks, mpdm = result.best["tasks_finished"], result.best["mpdm_tasks_finished"]
         print(
             f"best greedy tasks finished {tasks:.1f} vs MPDM {mpdm:.1f} "
             f"({100.0 * (tasks - mpdm) / mpdm:+.1f}%) after {result.frames} frames"

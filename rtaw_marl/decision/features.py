@@ -111,32 +111,17 @@ def decision_features(
         if "fleet" in keys:
             out["fleet"] = fleet_features(d.free_at, d.time, d.scale)
         return out
-    out = {"action_mask": np.array(d.queue_mask, dtype=bool)}
-    if {"robots", "agent"} & keys:
-        rows = robot_features(d.robot_xy, d.free_at, d.time, d.scale)
-        if viewers is not None:
-            out["robots"] = np.broadcast_to(rows, (len(viewers), *rows.shape))
-            out["agent"] = rows[viewers]
-        else:
-            out["robots"] = rows
-            actor = np.asarray(d.robot)[..., None, None]
-            out["agent"] = np.take_along_axis(rows, actor, -2)[..., 0, :]
-    if "fleet" in keys:
-        fleet = fleet_features(d.free_at, d.time, d.scale)
-        out["fleet"] = fleet if viewers is None else np.broadcast_to(fleet, (len(viewers), 8))
+    viewers = np.asarray(viewers)
+    out = _fleet_views(d, keys, viewers)
+    out["action_mask"] = np.array(d.queue_mask, dtype=bool)
     if "tasks" in keys:
-        own = d.own_distances if viewers is None else d.distances[viewers]
+        own = d.distances[viewers]
         out["tasks"] = task_features(d.queue_rows, d.queue_length, own, d.queue_mask, d.scale)
     if set(RELATIONAL_KEYS) & keys:
-        who = np.asarray(d.robot)[..., None] if viewers is None else np.asarray(viewers)
         remaining = d.free_at - np.asarray(d.time, dtype=np.float64)[..., None]
-        rel, rivals = relational_features(
-            d.distances, remaining, who, d.queue_length, d.waits, d.nearest, d.queue_mask,
+        out["relations"], out["rivals"] = relational_features(
+            d.distances, remaining, viewers, d.queue_length, d.waits, d.nearest, d.queue_mask,
             d.scale,
-        )  # fmt: skip
-        # One view per leading index: drop the viewer axis.
-        out["relations"], out["rivals"] = (rel, rivals) if viewers is not None else (
-            rel[..., 0, :, :], rivals[..., 0, :, :, :]
         )  # fmt: skip
     return out
 

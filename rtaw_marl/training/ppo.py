@@ -75,6 +75,8 @@ class TrainResult:
     #: The TTD of the selected (best) evaluation.
     best_ttd: float
     history: list[dict[str, float]] = field(default_factory=list)
+    #: The selected (best) evaluation's row: what ``best.pt`` holds.
+    best: dict[str, float] = field(default_factory=dict)
     #: Seconds spent per phase over the run (``time/collect_s``, ``time/update_s``, ...).
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -299,7 +301,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     best = min(evaluator.history, key=lambda r: (score(r), r["frames"]))
     return TrainResult(
         run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
-        best["ttd"], evaluator.history, totals,
+        best["ttd"], evaluator.history, timings=totals, best=best,
     )  # fmt: skip
 
 

@@ -82,6 +82,8 @@ def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) ->
     assert all(row["score"] == -row["tasks_finished"] for row in rows)
     best = torch.load(result.best_checkpoint, weights_only=False)
     assert best["eval"]["tasks_finished"] == max(row["tasks_finished"] for row in rows)
+    assert result.best == best["eval"]
+    assert "time/update_s" in result.timings
     assert best["eval"]["frames"] == min(
         r["frames"] for r in rows if r["tasks_finished"] == best["eval"]["tasks_finished"]
     )
