@@ -51,7 +51,7 @@ out-of-range slot, or anything that is not an integer, raises
 ## Rewards
 
 The reward of the decision just taken: minus its travel delay (`reward="ttd"`; or the
-ablations `"length"`, `"ttd_length"`). It is what the simulator returns for the
+ablations `"length"`, `"ttd_length"`, `"pair_cost"`). It is what the simulator returns for the
 decision, not the PettingZoo `step(); last()` pattern, which would hand back the *next*
 robot's reward from its previous decision (the credit of another decision). Over an
 episode the rewards add up to minus `info["ttd"]`.

@@ -109,7 +109,8 @@ only valid action of a terminated or truncated agent.
 
 Minus the travel delay of the chosen task (`reward="ttd"`, the paper's reward), or for
 the paper's ablation minus the task length (`"length"`) or their sum
-(`"ttd_length"`). Only the acting robot is rewarded.
+(`"ttd_length"`), or the 2024 LoRR winner's pair cost in cells of travel (`"pair_cost"`:
+minus `ttd + length / 5`). Only the acting robot is rewarded.
 
 ## Termination and truncation
 

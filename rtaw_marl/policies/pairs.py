@@ -26,12 +26,11 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from rtaw_marl.sim.config import PAIR_WEIGHT
 from rtaw_marl.sim.core import WarehouseSim
 
 __all__ = ["PAIR_WEIGHT", "PairGreedy", "greedy_pairs", "pair_costs"]
 
-#: The winner's weight of the travel to the first errand against the task's length.
-PAIR_WEIGHT = 5.0
 
 
 def pair_costs(

@@ -16,8 +16,13 @@ __all__ = ["EPISODE_MODES", "REFILLS", "REWARDS", "SimBuffers", "SimConfig"]
 EPISODE_MODES = ("drain", "paper", "horizon")
 #: When an emptied queue slot takes the next task of the stream.
 REFILLS = ("assign", "finish")
-#: Reward = minus this quantity of the chosen task (the paper's reward ablation).
-REWARDS = ("ttd", "length", "ttd_length")
+#: Reward = minus this quantity of the chosen task (the paper's reward ablation, then
+#: ``pair_cost``: the 2024 LoRR winner's pair cost per cell of travel to the pickup).
+REWARDS = ("ttd", "length", "ttd_length", "pair_cost")
+#: The 2024 LoRR winner's weight of the travel to a task's pickup against the task's
+#: length (``Straple/OMAPFS``, ``greedy_scheduler.cpp``): its pair cost is
+#: ``PAIR_WEIGHT x travel + length``.
+PAIR_WEIGHT = 5.0
 
 
 @dataclass(frozen=True)
@@ -56,7 +61,9 @@ class SimConfig:
             at least 0: a delay on top of the travel time (single draws below 0 end a
             task no earlier than its decision).
         noise_var: Its variance, at least 0; 0 makes the dynamics deterministic.
-        reward: ``"ttd"`` (default), ``"length"`` or ``"ttd_length"``.
+        reward: ``"ttd"`` (default), ``"length"``, ``"ttd_length"`` or ``"pair_cost"``
+            (``ttd + length / PAIR_WEIGHT``: the winner's pair cost in cells of travel,
+            the delivery leg a tie-breaker between tasks equally near).
         robot_starts: ``(x, y)`` start cell per robot; random distinct free cells from
             the episode seed when ``None``.
         robot_free_times: Time at which each robot is first free; all 0 when ``None``.

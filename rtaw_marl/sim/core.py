@@ -41,7 +41,7 @@ import numpy as np
 
 from rtaw_marl.errors import ConfigError, InvalidActionError
 from rtaw_marl.sim.clock import DecisionClock
-from rtaw_marl.sim.config import REWARDS, SimBuffers, SimConfig
+from rtaw_marl.sim.config import PAIR_WEIGHT, REWARDS, SimBuffers, SimConfig
 from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.execution import EpisodeRecords, Executor, InstantTravel
 from rtaw_marl.sim.inputs import slot_index
@@ -400,7 +400,9 @@ class WarehouseSim(Reassignment):
             return -ttd
         if self._reward_code == 1:
             return -length
-        return -(ttd + length)
+        if self._reward_code == 2:
+            return -(ttd + length)
+        return -(ttd + length / PAIR_WEIGHT)
 
     def _drop_started(self) -> None:
         """Held tasks picked up since the last decision leave their slots."""

@@ -31,6 +31,10 @@ class Reassignment:
     queue_ids: np.ndarray
     queue_mask: np.ndarray
     task_moved: np.ndarray
+    task_robot: np.ndarray
+    task_assigned: np.ndarray
+    task_ttd: np.ndarray
+    task_finished: np.ndarray
     robot_xy: np.ndarray
     robot_free_at: np.ndarray
     time: float
@@ -116,5 +120,9 @@ class Reassignment:
         self._queue_distances.robot_moved(holder)
         self._owed[holder] = False  # its task is not finished: nothing new is revealed
         self.task_moved[task] = self.time
+        # Unassigned again until a robot takes it: a task given back and left queued at
+        # the horizon must not count as served, nor finished at its old estimate.
+        self.task_robot[task] = -1
+        self.task_assigned[task] = self.task_ttd[task] = self.task_finished[task] = np.nan
         self.queue_mask[slot] = True  # the common path assigns it (and holds it again)
         self.queue_holder[slot] = -1

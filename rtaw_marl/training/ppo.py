@@ -247,9 +247,11 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
             postfix.update(
                 eval_tasks=f"{row['tasks_finished']:.0f}",
                 mpdm_tasks=f"{row['mpdm_tasks_finished']:.0f}",
+                **{f"{evaluator.rule}_tasks": f"{row[f'{evaluator.rule}_tasks_finished']:.0f}"},
             )
         else:
             postfix.update(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
+            postfix[f"{evaluator.rule}_ttd"] = f"{row[f'{evaluator.rule}_ttd']:.0f}"
         bar.set_postfix(postfix)
         saver.save(row, evaluator.history)
         eval_s.append(time.perf_counter() - began)

@@ -24,9 +24,10 @@ def plot_training_curve(history: list[dict[str, float]], path: Path) -> Path | N
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=120)
     ax.plot(frames, [row["ttd"] for row in history], marker="o", label="RTAW (greedy)")
     ax.axhline(history[0]["mpdm_ttd"], color="tab:red", linestyle="--", label="MPDM")
-    if "lookahead_ttd" in history[0]:  # runs before the lookahead reference lack it
-        ax.axhline(history[0]["lookahead_ttd"], color="tab:green", linestyle=":",
-                   label="lookahead")  # fmt: skip
+    for rule in ("lookahead", "pair_greedy"):  # the setting's strongest rule, if logged
+        if f"{rule}_ttd" in history[0]:
+            ax.axhline(history[0][f"{rule}_ttd"], color="tab:green", linestyle=":",
+                       label=rule)  # fmt: skip
     ax.set_xlabel("frames (decisions)")
     ax.set_ylabel("mean episode TTD (s)")
     ax.set_title("Evaluation on fixed seeds")

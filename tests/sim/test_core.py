@@ -262,7 +262,7 @@ def test_invalid_action_on_empty_slot_and_after_done(poc_sim: Callable[..., Ware
         ({"num_robots": 2.5}, "num_robots must be an integer"),
         ({"queue_len": True}, "queue_len must be an integer"),
         ({"episode_mode": "endless"}, "episode_mode must be one of drain, paper"),
-        ({"reward": "makespan"}, "reward must be one of ttd, length, ttd_length"),
+        ({"reward": "makespan"}, "reward must be one of ttd, length, ttd_length, pair_cost"),
         ({"noise_var": -0.1}, "noise_var must be >= 0"),
         ({"noise_var": float("nan")}, "noise_var must be a finite number"),
         ({"noise_var": float("inf")}, "noise_var must be a finite number"),
@@ -411,10 +411,10 @@ def test_time_is_non_decreasing(seed: int) -> None:
 
 
 def test_rewards_match_metrics() -> None:
-    """reward='ttd' sums to -TTD, 'length' to -task_length, 'ttd_length' to -(TTD + length);
-    the reward does not change the dynamics."""
+    """reward='ttd' sums to -TTD, 'length' to -task_length, 'ttd_length' to -(TTD + length),
+    'pair_cost' to -(TTD + length / 5); the reward does not change the dynamics."""
     results = {}
-    for reward in ("ttd", "length", "ttd_length"):
+    for reward in ("ttd", "length", "ttd_length", "pair_cost"):
         sim = small_sim(reward=reward)
         actions, rewards = run(sim, RandomPolicy(), 6)
         results[reward] = (actions, sum(rewards), sim.metrics())
@@ -425,6 +425,8 @@ def test_rewards_match_metrics() -> None:
     assert results["ttd"][1] == pytest.approx(-metrics.ttd, rel=1e-12)
     assert results["length"][1] == pytest.approx(-metrics.task_length, rel=1e-12)
     assert results["ttd_length"][1] == pytest.approx(-(metrics.ttd + metrics.task_length))
+    assert results["pair_cost"][2] == metrics
+    assert results["pair_cost"][1] == pytest.approx(-(metrics.ttd + metrics.task_length / 5))
 
 
 def test_per_decision_reward_is_ttd(poc_sim: Callable[..., WarehouseSim]) -> None:

@@ -181,3 +181,23 @@ def test_release_gives_held_tasks_back_and_frees_their_robots() -> None:
     while not sim.done:
         sim.step(int(np.flatnonzero(sim.legal_actions())[0]))
     assert sim.metrics().tasks_finished > 0
+
+
+def test_a_task_given_back_is_unassigned_until_taken_again() -> None:
+    """A released task left in the queue is neither served nor finished: the episode's
+    count agrees with the executed schedule (it counted the old holder's estimate)."""
+    sim = _sim(horizon=60)
+    sim.reset(3)
+    _play_until_held(sim)
+    slot = int(np.flatnonzero(sim.reassignable())[0])
+    task = int(sim.queue_ids[slot])
+    sim.release(np.array([int(sim.queue_holder[slot])]))
+    assert sim.task_robot[task] == -1
+    assert np.isnan(sim.task_finished[task]) and np.isnan(sim.task_assigned[task])
+    while not sim.done:  # nobody takes the task again
+        legal = sim.legal_actions()
+        legal[slot] = legal[slot] and sim.queue_ids[slot] != task
+        sim.step(int(np.flatnonzero(legal)[0]))
+    assert sim.task_robot[task] == -1
+    schedule = sim.schedule()
+    assert sim.metrics().tasks_finished == len(schedule.task_delivered)

@@ -70,7 +70,7 @@ def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) ->
     problem = _tiny_lorr_problem(tmp_path)
     overrides = ["scenario=lorr", f"tasks.problem={problem}", "sim.horizon=60",
                  "frames=1024", "collector.envs_per_worker=4",
-                 "model=rtaw_plus", "candidates=2", "sim.reward=ttd_length",
+                 "model=rtaw_plus", "candidates=2", "sim.reward=pair_cost",
                  "selection.metric=tasks_finished", "selection.every_frames=512"]  # fmt: skip
     cfg = train_cfg(overrides)
     assert cfg.sim.queue_len > 2
@@ -83,6 +83,9 @@ def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) ->
     best = torch.load(result.best_checkpoint, weights_only=False)
     assert best["eval"]["tasks_finished"] == max(row["tasks_finished"] for row in rows)
     assert result.best == best["eval"]
+    # The bar to clear under LoRR's reassignment is the winner's rule, on every row.
+    assert all(row["pair_greedy_tasks_finished"] > 0 for row in rows)
+    assert all("pair_greedy_ttd" in row and "lookahead_ttd" not in row for row in rows)
     assert "time/update_s" in result.timings
     assert best["eval"]["frames"] == min(
         r["frames"] for r in rows if r["tasks_finished"] == best["eval"]["tasks_finished"]
