@@ -193,7 +193,8 @@ def test_a_task_given_back_is_unassigned_until_taken_again() -> None:
     task = int(sim.queue_ids[slot])
     sim.release(np.array([int(sim.queue_holder[slot])]))
     assert sim.task_robot[task] == -1
-    assert np.isnan(sim.task_finished[task]) and np.isnan(sim.task_assigned[task])
+    assert np.isnan(sim.task_finished[task])
+    assert np.isnan(sim.task_assigned[task])
     while not sim.done:  # nobody takes the task again
         legal = sim.legal_actions()
         legal[slot] = legal[slot] and sim.queue_ids[slot] != task
