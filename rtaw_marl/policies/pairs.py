@@ -32,7 +32,6 @@ from rtaw_marl.sim.core import WarehouseSim
 __all__ = ["PAIR_WEIGHT", "PairGreedy", "greedy_pairs", "pair_costs"]
 
 
-
 def pair_costs(
     to_pickup: np.ndarray, length: np.ndarray, weight: float = PAIR_WEIGHT
 ) -> np.ndarray:
