@@ -286,3 +286,36 @@ def test_pair_greedy_reschedules_by_lorr_rules(tmp_path: Path) -> None:
     assert lorr.errors == []
     assert lorr.finished >= 10
     assert scheduler.stats.deferred == 0
+
+
+def test_busy_robots_free_times_are_planned_once_per_task(tmp_path: Path) -> None:
+    """A busy robot's free time is planned when it is first seen with its task (the
+    own simulator's planned free time), not measured again each timestep: a timestep
+    where no task changed hands and none appeared asks the map for no distance."""
+    problem = _tiny(tmp_path)
+    scheduler = _scheduler(problem, "mpdm")
+    lorr = FakeLoRR(problem)
+    nav = scheduler.sim.distance_model
+    real = scheduler._distance
+    asked: list[int] = []
+    scheduler._distance = lambda a, b: (asked.append(len(a)), real(a, b))[1]  # type: ignore[method-assign]
+    planned: dict[tuple[int, int], float] = {}
+    quiet, before_schedule, before_pool = 0, None, None
+    for _ in range(40):
+        step = lorr.step()
+        asked.clear()
+        proposed = scheduler.plan(step, 1.0)
+        busy = np.flatnonzero(step.schedule >= 0)
+        for robot in busy.tolist():
+            key = (robot, int(step.schedule[robot]))
+            planned.setdefault(key, float(scheduler._free_at[robot]))
+            assert scheduler._free_at[robot] == planned[key]  # kept while the task is
+            assert scheduler.sim.robot_free_at[robot] >= step.time + 1
+        if np.array_equal(step.schedule, before_schedule) and set(step.pool) == before_pool:
+            assert sum(asked) == 0
+            quiet += 1
+        before_schedule, before_pool = step.schedule, set(step.pool)
+        lorr.apply(proposed, nav)
+    assert lorr.errors == []
+    assert quiet > 0
+    assert len(planned) >= 5
