@@ -507,10 +507,15 @@ class WarehouseSim(Reassignment):
 
         Only instant travel can be restored; a collision-aware episode's state loads
         as instant travel without noise (its fleet's paths and waits are not modelled).
+        The kept fleet and queue distances are refreshed where the state differs (the
+        robots whose cell and the slots whose task changed), not recomputed whole: an
+        outside simulator loaded every timestep (LoRR's, ``external.load_decisions``)
+        changes a few of them.
 
         Raises:
             ConfigError: This simulator's executor is collision-aware.
         """
+        before = (self.robot_xy.copy(), self.queue_rows.copy(), self.queue_mask.copy())
         for key, value in state.arrays.items():
             current = getattr(self, key, None)
             if current is not None and current.shape == value.shape:
@@ -523,11 +528,20 @@ class WarehouseSim(Reassignment):
         if noise is None:
             noise = np.zeros(self.config.num_tasks)
         self._executor.load_travel(noise, self.decisions, self.robot_free_at)
-        for slot in np.flatnonzero(self.queue_mask):
+        self._dist = None
+        xy, rows, mask = before
+        if xy.shape != self.robot_xy.shape or rows.shape != self.queue_rows.shape:
+            changed = np.flatnonzero(self.queue_mask)
+            self._queue_distances.clear()
+        else:
+            # A slot changed if it was filled or emptied, or holds another task's cells.
+            new_rows = (self.queue_rows != rows).any(axis=1)
+            changed = np.flatnonzero((mask != self.queue_mask) | (self.queue_mask & new_rows))
+            self._queue_distances.slots_changed(changed)
+            self._queue_distances.robots_moved(np.flatnonzero((self.robot_xy != xy).any(axis=1)))
+        for slot in changed[self.queue_mask[changed]].tolist():
             ox, oy = self.queue_rows[slot, :2].tolist()
             self._slots.set(int(slot), ox, oy)
-        self._queue_distances.clear()
-        self._dist = None
 
     # ------------------------------------------------------------------ results
     def metrics(self) -> EpisodeMetrics:

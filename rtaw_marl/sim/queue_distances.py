@@ -82,9 +82,18 @@ class QueueDistances:
 
     def slot_changed(self, slot: int) -> None:
         """Slot ``slot``'s origin target or destination row changed."""
-        self._changed.append(slot)
-        self._chain_changed.append(slot)
-        self._near_changed.append(slot)
+        self.slots_changed([slot])
+
+    def robots_moved(self, robots: np.ndarray | list[int]) -> None:
+        """The free cells of ``robots`` changed (a loaded state's robots that moved)."""
+        self._moved.extend(np.asarray(robots, dtype=np.int64).tolist())
+
+    def slots_changed(self, slots: np.ndarray | list[int]) -> None:
+        """The tasks of ``slots`` changed (a loaded state's queue)."""
+        ids = np.asarray(slots, dtype=np.int64).tolist()
+        self._changed.extend(ids)
+        self._chain_changed.extend(ids)
+        self._near_changed.extend(ids)
 
     def fleet(self, robot_xy: np.ndarray) -> np.ndarray:
         """Distances ``float64 [M, N]`` from each robot's cell ``robot_xy int [M, 2]`` to

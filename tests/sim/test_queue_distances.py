@@ -97,6 +97,31 @@ def test_kept_distances_after_a_loaded_state() -> None:
     np.testing.assert_array_equal(target.chain_nearest(every), _fresh_nearest(source, every))
 
 
+@pytest.mark.parametrize("cell_slots", [False, True])
+def test_kept_distances_across_loads_of_nearby_states(
+    cell_slots: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A mirror loaded again and again with an outside episode's states (deciding in
+    between, as LoRR's adapter does) refreshes only what each load changed, and its kept
+    distances equal fresh ones after every load."""
+    if cell_slots:
+        monkeypatch.setattr(distances, "SLOT_FIELDS_BYTES", 0)
+    source, mirror = _sim("astar"), _sim("astar")
+    source.reset(1)
+    mirror.reset(2)
+    every = np.arange(mirror.queue_len)
+    for i in range(40):
+        source.step(int(np.flatnonzero(source.queue_mask)[0]))
+        if i % 3:
+            continue
+        mirror.load_state(source.state())
+        np.testing.assert_array_equal(mirror.distance_matrix(), source.distance_matrix(every))
+        np.testing.assert_array_equal(mirror.chain_nearest(), source.chain_nearest(every))
+        np.testing.assert_array_equal(mirror.chain_nearest(every), _fresh_nearest(source, every))
+        mirror.step(int(np.flatnonzero(mirror.queue_mask)[-1]))  # the mirror decides
+        mirror.distance_matrix(), mirror.chain_nearest(every)  # and keeps what it saw
+
+
 def test_a_caller_writing_the_returned_matrix_does_not_change_the_next_one() -> None:
     sim = _sim("direct")
     sim.reset(0)
