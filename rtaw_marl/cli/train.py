@@ -28,12 +28,10 @@ def run(cfg: DictConfig | TrainConfig) -> None:
     if cfg.selection.metric == "tasks_finished":
         best = result.best
         tasks, mpdm = best["tasks_finished"], best["mpdm_tasks_finished"]
-        rules = [k.removesuffix("_tasks_finished") for k in best if k.endswith("_tasks_finished")]
-        rule = next((r for r in rules if r != "mpdm"), None)
         versus = f"vs MPDM {mpdm:.1f} ({100.0 * (tasks - mpdm) / mpdm:+.1f}%)"
-        if rule is not None:
-            bar = best[f"{rule}_tasks_finished"]
-            versus += f", {rule} {bar:.1f} ({100.0 * (tasks - bar) / bar:+.1f}%)"
+        bar = best.get(f"{result.rule}_tasks_finished")  # absent in rows of older runs
+        if bar is not None:
+            versus += f", {result.rule} {bar:.1f} ({100.0 * (tasks - bar) / bar:+.1f}%)"
         print(f"best greedy tasks finished {tasks:.1f} {versus} after {result.frames} frames")
     else:
         gap = 100.0 * (result.mpdm_ttd - result.best_ttd) / result.mpdm_ttd

@@ -83,7 +83,7 @@ class MatchedPolicy:
         """Forget the timestep's matching (greedy decisions: the seed is unused)."""
         del seed
         self._plan: tuple[tuple[int, float], dict[int, tuple[int, int]]] | None = None
-        self._asked: set[int] = set()
+        self._asked = np.zeros(0, dtype=bool)  # robots matched this timestep
 
     def act_sim(self, sim: WarehouseSim) -> int:
         """The selected robot's match, or its own decision when it has none.
@@ -92,13 +92,13 @@ class MatchedPolicy:
         :data:`BATCH` free robots not yet matched (itself first, then by id)."""
         key = (id(sim), sim.time)
         if self._plan is None or self._plan[0] != key:
-            self._plan, self._asked = (key, {}), set()
+            self._plan, self._asked = (key, {}), np.zeros(sim.num_robots, dtype=bool)
         plan = self._plan[1]
-        if sim.robot not in self._asked:
-            free = [r for r in sim.free_robots().tolist() if r not in self._asked]
-            free.remove(sim.robot)
-            robots = np.array([sim.robot, *free[: BATCH - 1]], dtype=np.int64)
-            self._asked.update(robots.tolist())
+        if not self._asked[sim.robot]:
+            free = sim.free_robots()
+            free = free[~self._asked[free] & (free != sim.robot)]
+            robots = np.concatenate([[sim.robot], free[: BATCH - 1]]).astype(np.int64)
+            self._asked[robots] = True
             plan.update(self.match(sim, robots))
         planned = plan.get(sim.robot)
         if planned is not None:

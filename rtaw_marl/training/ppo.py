@@ -77,6 +77,8 @@ class TrainResult:
     history: list[dict[str, float]] = field(default_factory=list)
     #: The selected (best) evaluation's row: what ``best.pt`` holds.
     best: dict[str, float] = field(default_factory=dict)
+    #: The setting's strongest rule, the bar in each row (``<rule>_ttd``, ...).
+    rule: str = "lookahead"
     #: Seconds spent per phase over the run (``time/collect_s``, ``time/update_s``, ...).
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -303,7 +305,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     best = min(evaluator.history, key=lambda r: (score(r), r["frames"]))
     return TrainResult(
         run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
-        best["ttd"], evaluator.history, timings=totals, best=best,
+        best["ttd"], evaluator.history, timings=totals, best=best, rule=evaluator.rule,
     )  # fmt: skip
 
 

@@ -84,6 +84,7 @@ def test_rtaw_train_on_candidates_of_a_lorr_window(train_cfg, tmp_path: Path) ->
     assert best["eval"]["tasks_finished"] == max(row["tasks_finished"] for row in rows)
     assert result.best == best["eval"]
     # The bar to clear under LoRR's reassignment is the winner's rule, on every row.
+    assert result.rule == "pair_greedy"
     assert all(row["pair_greedy_tasks_finished"] > 0 for row in rows)
     assert all("pair_greedy_ttd" in row and "lookahead_ttd" not in row for row in rows)
     assert "time/update_s" in result.timings
@@ -115,3 +116,19 @@ def test_bad_candidates_or_metric_are_one_line(
     assert result.code == 2
     assert message in result.err
     assert "Traceback" not in result.err + result.out
+
+
+def test_rtaw_train_ends_with_the_bar_to_clear(cli, tmp_path: Path) -> None:
+    """Selected on tasks finished under LoRR's reassignment, the last lines name the
+    checkpoint's count against MPDM and against the winner's rule."""
+    problem = _tiny_lorr_problem(tmp_path)
+    result = cli(
+        "train", "scenario=lorr", f"tasks.problem={problem}", "sim.horizon=60", "frames=1024",
+        "selection.every_frames=512", "algo=ppo_paper", "model=rtaw_plus",
+        "candidates=2", "selection.metric=tasks_finished", "progress=false",
+        f"output_dir={tmp_path / 'run'}",
+    )  # fmt: skip
+    assert result.code == 0, result.err
+    line = next(ln for ln in result.out.splitlines() if ln.startswith("best greedy tasks"))
+    assert "vs MPDM" in line
+    assert ", pair_greedy " in line
