@@ -16,10 +16,12 @@ decides them together, at the first decision of each timestep:
    scores into tasks, so two robots never both want the nearest task of both.
 
 The robots then take their matches as the simulator selects them. A timestep that frees
-more than :data:`BATCH` robots is matched a batch at a time (each call bounded, so
-LoRR's clock can stop between them). A robot whose candidates all went to others, or
-whose match was taken meanwhile, decides alone, as the wrapped policy does. Decisions
-are deterministic.
+more than :data:`BATCH` robots (every robot at t = 0) is matched a batch at a time, each
+call bounded so LoRR's clock can stop between them: the selected robot with the free
+robots nearest it (grid distance; they compete for the same tasks, and their candidates
+overlap, so a batch's distance fields are few), the tasks promised to robots of earlier
+batches left out. A robot whose candidates all went to others decides alone, as the
+wrapped policy does. Decisions are deterministic.
 """
 
 from __future__ import annotations
@@ -84,38 +86,60 @@ class MatchedPolicy:
         del seed
         self._plan: tuple[tuple[int, float], dict[int, tuple[int, int]]] | None = None
         self._asked = np.zeros(0, dtype=bool)  # robots matched this timestep
+        self._promised = np.zeros(0, dtype=bool)  # slots matched to robots not yet served
+        #: Decisions served by a match, and decided alone (no match, or it was taken).
+        self.served = self.alone = 0
 
     def act_sim(self, sim: WarehouseSim) -> int:
         """The selected robot's match, or its own decision when it has none.
 
-        The first robot of a timestep without a match so far is matched with the next
-        :data:`BATCH` free robots not yet matched (itself first, then by id)."""
+        The first robot of a timestep without a match so far is matched with the
+        :data:`BATCH` ``- 1`` free robots nearest it not yet matched (itself first)."""
         key = (id(sim), sim.time)
         if self._plan is None or self._plan[0] != key:
             self._plan, self._asked = (key, {}), np.zeros(sim.num_robots, dtype=bool)
+            self._promised = np.zeros(sim.queue_len, dtype=bool)
         plan = self._plan[1]
         if not self._asked[sim.robot]:
-            free = sim.free_robots()
-            free = free[~self._asked[free] & (free != sim.robot)]
-            robots = np.concatenate([[sim.robot], free[: BATCH - 1]]).astype(np.int64)
+            robots = self._batch(sim)
             self._asked[robots] = True
-            plan.update(self.match(sim, robots))
-        planned = plan.get(sim.robot)
+            got = self.match(sim, robots, exclude=self._promised)
+            for slot, _ in got.values():
+                self._promised[slot] = True
+            plan.update(got)
+        planned = plan.pop(sim.robot, None)
         if planned is not None:
             slot, task = planned
+            self._promised[slot] = False
             if sim.queue_ids[slot] == task and sim.queue_mask[slot]:
+                self.served += 1
                 return slot
+        self.alone += 1
         return self.policy.act_sim(sim)
 
+    def _batch(self, sim: WarehouseSim) -> np.ndarray:
+        """``int64 [<= BATCH]``: the selected robot, then the free robots not yet matched
+        nearest it on the grid (ties to the lower id), in id order."""
+        free = sim.free_robots()
+        free = free[~self._asked[free] & (free != sim.robot)]
+        if len(free) > BATCH - 1:
+            gap = np.abs(sim.robot_xy[free] - sim.robot_xy[sim.robot]).sum(axis=1)
+            free = free[np.sort(np.argsort(gap, kind="stable")[: BATCH - 1])]
+        return np.concatenate([[sim.robot], free]).astype(np.int64)
+
     def match(
-        self, sim: WarehouseSim, robots: np.ndarray | None = None
+        self,
+        sim: WarehouseSim,
+        robots: np.ndarray | None = None,
+        exclude: np.ndarray | None = None,
     ) -> dict[int, tuple[int, int]]:
         """Robot -> ``(slot, task)`` for ``robots int [R]`` (default: every robot free
-        now), from one network call."""
+        now), from one network call; ``exclude bool [N]`` marks slots no robot may take
+        (promised to another)."""
         robots = sim.free_robots() if robots is None else np.asarray(robots, dtype=np.int64)
         if not sim.queue_mask.any():
             return {}
-        slots, logp = self.scores(sim, robots)
+        slots, logp = self.scores(sim, robots, exclude)
         columns, pos = np.unique(slots[slots >= 0], return_inverse=True)
         cost = np.full((len(robots), len(columns)), _OUTSIDE)
         rows = np.broadcast_to(np.arange(len(robots))[:, None], slots.shape)[slots >= 0]
@@ -129,19 +153,23 @@ class MatchedPolicy:
         return plan
 
     @torch.no_grad()
-    def scores(self, sim: WarehouseSim, robots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def scores(
+        self, sim: WarehouseSim, robots: np.ndarray, exclude: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Each robot's candidates and the network's log-probabilities of them.
 
         Args:
             sim: The simulator at a decision.
             robots: ``int [R]`` robots, each seen as if it were acting now.
+            exclude: ``bool [N]`` slots left out of the candidates (promised to robots
+                of an earlier batch); the decision still shows them queued.
 
         Returns:
             ``slots int64 [R, K]`` (ascending per row; ``-1`` pads rows with fewer than
             ``K`` queued tasks) and ``logp float32 [R, K]`` (``-inf`` on pads).
         """
         robots = np.asarray(robots, dtype=np.int64)
-        mask = sim.queue_mask
+        mask = sim.queue_mask if exclude is None else sim.queue_mask & ~exclude
         # The key of NetworkPolicy.act_sim (distance / L in float32): the same K slots.
         near = sim.robot_distances_many(robots, np.arange(sim.queue_len))
         key = np.where(mask, (near / sim.layout.scale).astype(np.float32), np.inf)
@@ -151,7 +179,7 @@ class MatchedPolicy:
         keys = frozenset(self.policy.feature_keys)
         decision = Decision.of_sim(sim, keys, union)
         features = decision_features(decision, keys, robots, index)
-        valid = features["action_mask"]
+        valid = features["action_mask"] & mask[slots]
         inputs = [
             torch.from_numpy(np.require(features[name], np.float32, "CW"))
             for name in self.policy.feature_keys

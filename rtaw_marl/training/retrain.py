@@ -86,8 +86,9 @@ def check_bases(names: Iterable[str], runs: Path = RUNS) -> None:
     names = set(names)
     for name in sorted(names):
         entry = ZOO[name]
-        # A generalist starts from its base's shipped checkpoint, not from a run.
-        shipped = entry.stage == "generalist"
+        # A generalist or a LoRR entry starts from its base's shipped checkpoint, not
+        # from a run.
+        shipped = entry.stage in ("generalist", "lorr")
         if entry.base is None or shipped or entry.base in names or _base_run(name, runs).exists():
             continue
         raise ConfigError(
@@ -228,7 +229,7 @@ def ship(
 
 def summary(shipped: Path = SHIPPED) -> str:
     """A markdown table of the shipped policies' selection figures, from their checkpoints
-    (docs/training.md's zoo table)."""
+    (docs/training.md's zoo table): the entries selected on TTD (not the ``lorr`` ones)."""
     lines = [
         "| policy | model | frames (best / run) | selection TTD | MPDM | lookahead | vs MPDM "
         "| vs lookahead | curve |",
@@ -236,7 +237,8 @@ def summary(shipped: Path = SHIPPED) -> str:
     ]
     for name, entry in ZOO.items():
         path = shipped / f"{name}.pt"
-        if not path.is_file():
+        # LoRR entries select on tasks finished, not TTD (docs/training.md gives theirs).
+        if not path.is_file() or entry.stage == "lorr":
             continue
         ckpt = load_checkpoint(path)
         best = ckpt["eval"]

@@ -77,7 +77,11 @@ class Recipe(shipped.Recipe):
         return cls(**{f.name: getattr(entry, f.name) for f in dataclasses.fields(entry)})
 
     def scenario_overrides(self) -> list[str]:
-        """The scenario's ``rtaw-train`` overrides, as the zoo's commands spell them."""
+        """The scenario's ``rtaw-train`` overrides, as the zoo's commands spell them (a
+        ``lorr`` entry's: ``scenario=lorr``, its problem and its :attr:`sim` keys)."""
+        if self.problem is not None:
+            sim = [f"sim.{k}={v}" for k, v in self.sim.items()]
+            return [f"scenario={self.scenario}", f"tasks.problem={self.problem}", *sim]
         return [o for o in self.setting().overrides() if o not in UNSPELLED]
 
     def overrides(self, runs: Path = RUNS) -> list[str]:
@@ -86,6 +90,12 @@ class Recipe(shipped.Recipe):
         ``<runs>/<base>/checkpoints/best.pt``."""
         if self.stage == "curriculum":
             return self.continuing(f"{runs / str(self.base)}/checkpoints/best.pt", self.base_frames)
+        if self.stage == "lorr":  # a shipped actor continued on a LoRR problem: own keys
+            return [
+                *self.scenario_overrides(), f"model={self.model}", "algo=ppo",
+                f"frames={self.budget}", f"seed={self.seed}", f"init_actor={self.base}",
+                *self.keys,
+            ]  # fmt: skip
         if self.mix:  # a specialist's actor continued on the mix: no warm start
             start = (f"init_actor={self.base}", *GENERALIST_KEYS, f"mix=[{','.join(self.mix)}]")
             tail: tuple[str, ...] = start

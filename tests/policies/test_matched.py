@@ -85,15 +85,14 @@ def test_matched_episodes_repeat_and_use_the_plan(network: NetworkPolicy) -> Non
         sim, policy = _sim(), MatchedPolicy(network)
         sim.reset(7)
         policy.reset(7)
-        served = decisions = 0
+        decisions = 0
         while not sim.done:
             slot = policy.act_sim(sim)
             assert sim.queue_mask[slot]
-            planned = policy._plan[1].get(sim.robot)
-            served += planned is not None and planned[0] == slot
             decisions += 1
             sim.step(slot)
-        assert served > 0.8 * decisions
+        assert policy.served + policy.alone == decisions
+        assert policy.served > 0.8 * decisions
         finished.append((sim.metrics().tasks_finished, sim.task_robot.copy()))
     assert finished[0][0] == finished[1][0] > 0
     np.testing.assert_array_equal(finished[0][1], finished[1][1])
@@ -146,18 +145,28 @@ def test_a_crowded_timestep_is_matched_a_batch_at_a_time(
     network: NetworkPolicy, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """At t = 0 every robot is free: each network call matches at most ``BATCH`` of
-    them (the selected robot first), every robot is matched once per timestep, and the
-    decisions stay legal."""
+    them, the selected robot and the free robots nearest it; every robot is matched once
+    per timestep, no task is promised twice, and the robots take their matches."""
     import rtaw_marl.policies.matched as matched
 
     monkeypatch.setattr(matched, "BATCH", 8)
     sim, policy = _sim(horizon=30), MatchedPolicy(network)
     calls: list[list[int]] = []
+    promised: list[int] = []
     match = policy.match
 
-    def spy(sim: WarehouseSim, robots: np.ndarray) -> dict[int, tuple[int, int]]:
+    def spy(
+        sim: WarehouseSim, robots: np.ndarray, exclude: np.ndarray | None = None
+    ) -> dict[int, tuple[int, int]]:
         calls.append([sim.robot, *np.asarray(robots).tolist()])
-        return match(sim, robots)
+        free = sim.free_robots()
+        left = free[~policy._asked[free]]  # (the batch is marked asked already)
+        gap = np.abs(sim.robot_xy - sim.robot_xy[sim.robot]).sum(axis=1)
+        if len(left):
+            assert gap[robots].max() <= gap[left].min()
+        got = match(sim, robots, exclude)
+        promised.extend(task for _, task in got.values())
+        return got
 
     policy.match = spy  # type: ignore[method-assign]
     sim.reset(1)
@@ -169,4 +178,6 @@ def test_a_crowded_timestep_is_matched_a_batch_at_a_time(
     assert len(calls) >= sim.num_robots // 8
     assert all(len(c) <= 9 and c[0] == c[1] for c in calls)  # the selected robot first
     matched_robots = [r for c in calls for r in c[1:]]
-    assert len(matched_robots) == len(set(matched_robots))
+    assert len(matched_robots) == len(set(matched_robots)) == sim.num_robots
+    assert len(promised) == len(set(promised))
+    assert policy.served == len(promised) > 0.9 * sim.num_robots

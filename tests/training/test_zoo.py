@@ -3,6 +3,7 @@ train on their named scenarios, ``+zoo=NAME`` is the recipe, and ``rtaw-zoo`` ru
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -16,6 +17,7 @@ from rtaw_marl.models.checkpoint import load_checkpoint
 from rtaw_marl.policies.pretrained.recipes import RECIPES
 from rtaw_marl.policies.pretrained.registry import PRETRAINED, SHIPPED, pretrained_path
 from rtaw_marl.scenarios import SCENARIOS
+from rtaw_marl.sim.maps import resolve_path
 from rtaw_marl.training.checkpoints import scenario_changes
 from rtaw_marl.training.config import upgrade_command, upgrade_config
 from rtaw_marl.training.zoo import (
@@ -43,7 +45,8 @@ def test_the_recipe_table_is_every_shipped_policy_and_names_real_scenarios() -> 
     for name, entry in RECIPES.items():
         assert ZOO[name] == Recipe.of(entry)
         assert entry.name == name
-        assert entry.scenario in SCENARIOS
+        assert entry.scenario in SCENARIOS or (entry.scenario, entry.stage) == ("lorr", "lorr")
+        assert (entry.problem is not None) == (entry.stage == "lorr") == bool(entry.keys)
         assert entry.stage in STAGES
         assert entry.model == ("rtaw_plus" if name.endswith("_plus") else "rtaw")
         assert (entry.base is None) == (entry.stage == "train")
@@ -52,6 +55,8 @@ def test_the_recipe_table_is_every_shipped_policy_and_names_real_scenarios() -> 
         if entry.stage == "generalist":  # continues a shipped specialist's actor
             assert RECIPES[entry.base].stage != "generalist"
             assert entry.mix
+        elif entry.stage == "lorr":  # continues a shipped actor: the generalist's, or a
+            assert RECIPES[entry.base].stage in ("generalist", "lorr")  # LoRR entry's
         else:
             assert entry.base is None or RECIPES[entry.base].stage == "train"
     with pytest.raises(ConfigError, match="available: A_astar_m10"):
@@ -119,10 +124,68 @@ def test_each_recipe_trains_on_its_scenario(name: str) -> None:
     """The command's spelling (the default tasks left out) composes the named scenario,
     as ``rtaw-train scenario=NAME`` and Python build it."""
     entry = ZOO[name]
+    if entry.problem is not None:
+        _lorr_recipe_trains_on_its_problem(entry)
+        return
     spelled = to_typed(compose("train", entry.scenario_overrides())).sim_spec()
     assert spelled == entry.setting().spec()
     sim = [f"sim.{k}={v}" for k, v in entry.sim.items()]
     assert to_typed(compose("train", [f"scenario={entry.scenario}", *sim])).sim_spec() == spelled
+
+
+def _lorr_recipe_trains_on_its_problem(entry: Recipe) -> None:
+    """``scenario=lorr tasks.problem=P sim.*`` is :func:`lorr_scenario` of the problem
+    (the paths as spelled and as resolved aside)."""
+    problem = resolve_path(str(entry.problem))
+    if not problem.is_file():
+        pytest.skip(f"{entry.name}'s problem is not here: {problem}")
+    spelled = to_typed(compose("train", entry.scenario_overrides())).sim_spec()
+    built = entry.setting().spec()
+    assert Path(built.tasks.problem).resolve() == problem.resolve()
+    assert spelled.sim == built.sim
+    assert spelled.navigator == built.navigator
+    assert dataclasses.replace(spelled.tasks, problem=built.tasks.problem) == built.tasks
+    assert dataclasses.replace(spelled.layout, problem=built.layout.problem) == built.layout
+
+
+@pytest.mark.parametrize("name", [n for n in STAGED if ZOO[n].stage == "lorr"])
+def test_lorr_policies_record_the_run_as_typed_and_its_recipe(name: str) -> None:
+    """A LoRR entry's checkpoint records the recipe's command and config, and the run as
+    typed (its base actor as a run's file, its problem as an absolute path): the same
+    config but for those spellings. Selected on seeds 1000+ by tasks finished, on its
+    problem's LoRR sizes."""
+    entry = ZOO[name]
+    ckpt = load_checkpoint(pretrained_path(name))
+    typed = ckpt["trained_as"]["command"]
+    for problem in (resolve_path(str(entry.problem)), Path(_arg(typed, "tasks.problem"))):
+        if not resolve_path(str(problem)).is_file():  # the configs read the problem
+            pytest.skip(f"{name}'s problem is not here: {problem}")
+    assert typed[1] == "scenario=lorr"
+    assert Path(_arg(typed, "tasks.problem")).name == Path(str(entry.problem)).name
+    assert _arg(typed, "init_actor") in (entry.base, *_RUN_FILES[name])
+    recipe_cfg = as_plain(to_typed(compose("train", ckpt["command"][1:])))
+    stored = upgrade_config(ckpt["config"])
+    assert stored == recipe_cfg
+    spelled = {"init_actor", "output_dir", "progress", "layout", "tasks"}
+    typed_cfg = as_plain(to_typed(compose("train", typed[1:])))
+    assert {k: v for k, v in typed_cfg.items() if k not in spelled} == {
+        k: v for k, v in recipe_cfg.items() if k not in spelled
+    }
+    assert min(stored["selection"]["seeds"]) >= 1000
+    assert stored["selection"]["metric"] == "tasks_finished"
+    assert "tasks_finished" in ckpt["eval"]
+    assert ckpt["frames"] <= entry.budget == stored["frames"]
+
+
+#: The run files a LoRR entry's base was trained as (the base's shipped best).
+_RUN_FILES = {
+    "lorr_random_plus": (),
+    "lorr_warehouse_plus": ("runs/lorr_traffic_random/checkpoints/best.pt",),
+}
+
+
+def _arg(command: list[str], key: str) -> str:
+    return next(a.split("=", 1)[1] for a in command if a.startswith(f"{key}="))
 
 
 @pytest.mark.parametrize("name", [n for n in STAGED if ZOO[n].stage == "curriculum"])

@@ -7,7 +7,7 @@ Each :class:`Recipe` names its scenario (a :data:`~rtaw_marl.scenarios.SCENARIOS
 name, with the simulator keys it changes), its network, its PPO budget and, for a staged
 entry, the entry whose run it continues.
 
-Four kinds of entries (:attr:`Recipe.stage`):
+Five kinds of entries (:attr:`Recipe.stage`):
 
 * ``train``: from scratch. The paper's network (``<scenario>``) and RTAW+
   (``<scenario>_plus``) get the same recipe and budget (docs/training.md): a warm start
@@ -24,6 +24,12 @@ Four kinds of entries (:attr:`Recipe.stage`):
   specialist (:attr:`Recipe.base`) continued with a fresh critic on a scenario mix
   (:data:`~rtaw_marl.scenarios.mix.GENERALIST`) for :data:`GENERALIST_FRAMES` frames,
   selected on seeds 1000-1009 of a mix member.
+* ``lorr``: learned schedulers for LoRR's problems with traffic (``lorr_random_plus``,
+  ``lorr_warehouse_plus``): the actor of a shipped policy (:attr:`Recipe.base`)
+  continued with a fresh critic on a LoRR problem (:attr:`Recipe.problem`, ``scenario=
+  lorr``) with its own keys (:attr:`Recipe.keys`: the reward, ``candidates``, selection
+  on tasks finished), selected on seeds 1000+ of the problem (docs/training.md,
+  "Training with traffic on LoRR's problems").
 
 Policies trained with 10 robots also run with 100 or 1000: the networks' sizes do not
 depend on them. This module is plain Python (no torch, no Hydra).
@@ -36,7 +42,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from rtaw_marl.scenarios import SCENARIOS, TABLE1_ROBOTS, Scenario
+from rtaw_marl.scenarios import SCENARIOS, TABLE1_ROBOTS, Scenario, lorr_scenario
 from rtaw_marl.scenarios.mix import GENERALIST
 
 __all__ = [
@@ -45,6 +51,8 @@ __all__ = [
     "GENERALIST_FRAMES",
     "GENERALIST_SECOND_STAGE",
     "LONG_FRAMES",
+    "LORR_FRAMES",
+    "LORR_KEYS",
     "RECIPES",
     "STAGES",
     "TABLE2_BASES",
@@ -71,7 +79,22 @@ GENERALIST_SECOND_STAGE = (
     "D_astar_m10:m50",
 )
 #: The kinds of entries.
-STAGES = ("train", "continued", "curriculum", "generalist")
+STAGES = ("train", "continued", "curriculum", "generalist", "lorr")
+#: The ``lorr`` entries' common keys: RTAW+ with a fleet summary for the critic, a third
+#: of the zoo's learning rate (a continued actor), the 32 nearest queued tasks per
+#: decision (LoRR's window holds 1.5 tasks per robot), selection on tasks finished every
+#: 32,768 frames (the best three kept), one learner thread.
+LORR_KEYS = (
+    "model.fleet_summary=true",
+    "algo.lr=0.0003",
+    "candidates=32",
+    "selection.metric=tasks_finished",
+    "selection.every_frames=32768",
+    "selection.keep=3",
+    "torch_threads=1",
+)
+#: A ``lorr`` entry's PPO frames.
+LORR_FRAMES = 393_216
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,8 +108,8 @@ class Recipe:
         model: ``rtaw`` (the paper's network) or ``rtaw_plus``.
         frames: PPO frames: the run's budget (``train``, ``continued``), or what it adds
             to its base's best checkpoint (``curriculum``).
-        stage: ``train``, ``continued``, ``curriculum`` or ``generalist`` (see the
-            module docstring).
+        stage: ``train``, ``continued``, ``curriculum``, ``generalist`` or ``lorr`` (see
+            the module docstring).
         base: The entry whose run it continues (staged entries).
         base_frames: A curriculum's base: its best checkpoint's PPO frames.
         seed: The training seed.
@@ -97,6 +120,9 @@ class Recipe:
             selection seeds (:mod:`rtaw_marl.training.selection`): the shipped
             checkpoint is the run's candidate that gains most there, not the first
             stage's best. Empty: ``best.pt``.
+        problem: A ``lorr`` entry's LoRR problem file (``builtin:NAME`` or a path
+            relative to the project's root); its :attr:`scenario` is then ``lorr``.
+        keys: A ``lorr`` entry's further ``rtaw-train`` overrides, as spelled.
     """
 
     name: str
@@ -110,9 +136,15 @@ class Recipe:
     seed: int = 0
     mix: tuple[str, ...] = ()
     second_stage: tuple[str, ...] = ()
+    problem: str | None = None
+    keys: tuple[str, ...] = ()
 
     def setting(self) -> Scenario:
-        """The scenario it trains on (with :attr:`sim`'s changes)."""
+        """The scenario it trains on (with :attr:`sim`'s changes); a ``lorr`` entry's
+        reads its problem file."""
+        if self.problem is not None:
+            sim = dict(self.sim)
+            return lorr_scenario(self.problem, sim.pop("num_robots", None), **sim)
         return SCENARIOS[self.scenario].with_sim(**self.sim)
 
     @property
@@ -159,7 +191,31 @@ def _recipes() -> list[Recipe]:
             mix=GENERALIST, second_stage=GENERALIST_SECOND_STAGE,
         )
     )  # fmt: skip
-    return out
+    return out + _lorr_recipes()
+
+
+def _lorr_recipes() -> list[Recipe]:
+    """The learned schedulers for LoRR's problems: the generalist's actor continued on the
+    start kit's random map (100 robots, reward: travel to the pickup plus the task's
+    length), then on the large warehouse with 2,000 robots (reward: the 2024 winner's
+    pair cost)."""
+    random_keys = ("sim.reward=ttd_length", "selection.seeds=[1000,1001,1002,1003,1004]",
+                   "collector.envs_per_worker=16")  # fmt: skip
+    warehouse_keys = ("sim.reward=pair_cost", "selection.seeds=[1000,1001]",
+                      "collector.envs_per_worker=8")  # fmt: skip
+    return [
+        Recipe(
+            name="lorr_random_plus", scenario="lorr", problem="builtin:random_32_32_20_100.json",
+            sim={"horizon": 500}, model="rtaw_plus", frames=LORR_FRAMES, stage="lorr",
+            base="generalist_plus", seed=7, keys=(*LORR_KEYS, *random_keys),
+        ),
+        Recipe(
+            name="lorr_warehouse_plus", scenario="lorr",
+            problem="../shared/maps/lorr/warehouse_large_5000.json",
+            sim={"num_robots": 2000, "horizon": 500}, model="rtaw_plus", frames=LORR_FRAMES,
+            stage="lorr", base="lorr_random_plus", seed=11, keys=(*LORR_KEYS, *warehouse_keys),
+        ),
+    ]  # fmt: skip
 
 
 #: Every shipped policy's recipe, by name: ``train`` entries first, then the staged ones
