@@ -203,6 +203,7 @@ def _schedulers(cfg: LoRRConfig, problem: str) -> dict[str, RunSpec | PlannerSpe
         "problem": problem,
         "timesteps": int(cfg.timesteps),
         "share": float(cfg.share),
+        "overflow": cfg.overflow,
         "baselines": dataclasses.asdict(cfg.baselines),
     }
     out: dict[str, RunSpec | None] = {}

@@ -50,6 +50,7 @@ def one_line_error(done: subprocess.CompletedProcess[str], message: str) -> None
         (["timesteps=99999999999"], "timesteps must be <= 2147483647"),
         (["plan_time_ms=10000000000000"], "plan_time_ms must be <= 2147483647"),
         (["policy=checkpoint", "checkpoint=/etc/hostname"], "/etc/hostname"),
+        (["overflow=later"], "unknown overflow 'later'; available: nearest, wait"),
     ],
 )
 def test_bad_runs_are_refused_before_any_run(tmp_path: Path, args: list[str], message: str) -> None:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rtaw_marl.errors import ConfigError
 from rtaw_marl.integrations.lorr.entry import RunSpec, build_scheduler
 from rtaw_marl.integrations.lorr.scheduler import PolicyScheduler, Timestep
 from rtaw_marl.sim.distances import DistanceModel
@@ -196,6 +197,31 @@ def test_out_of_time_robots_wait(tmp_path: Path) -> None:
     assert scheduler.plan(lorr.step(), 0.0) == [-1, -1]
     assert scheduler.stats.deferred == 2
     assert scheduler.plan(lorr.step(), 1.0) != [-1, -1]
+
+
+def test_out_of_time_robots_take_the_nearest_task_with_overflow_nearest(tmp_path: Path) -> None:
+    """``overflow=nearest``: with no time left the free robots take the open tasks whose
+    pickups are nearest them by grid distance (none deferred), LoRR accepts the
+    schedule, and the next timestep loads them busy with those tasks."""
+    problem = _tiny(tmp_path)
+    scheduler = _scheduler(problem, "mpdm", overflow="nearest")
+    lorr = FakeLoRR(problem)
+    step = lorr.step()
+    proposed = scheduler.plan(step, 0.0)
+    assert scheduler.stats.overflowed == 2
+    assert scheduler.stats.deferred == scheduler.stats.decisions == 0
+    # Robot 0 at cell 0 (0, 0), robot 1 at cell 17 (5, 2); the open tasks' pickups are
+    # cells 2 (2, 0), 12 (0, 2) and 9 (3, 1): robot 0 is 2 from cells 2 and 12 (the
+    # k-d tree's pick of the two), robot 1 is 3 from cell 9.
+    pickups = {t: lorr.pool[t]["locs"][0] for t in proposed}
+    assert pickups[proposed[1]] == 9
+    assert pickups[proposed[0]] in (2, 12)
+    lorr.apply(proposed, scheduler.sim.distance_model)
+    assert not lorr.errors
+    again = scheduler.plan(lorr.step(), 1.0)
+    assert again == proposed
+    with pytest.raises(ConfigError, match="unknown overflow 'later'; available: nearest, wait"):
+        _scheduler(problem, "mpdm", overflow="later")
 
 
 def test_refused_schedule_returns_tasks_to_the_queue(tmp_path: Path) -> None:

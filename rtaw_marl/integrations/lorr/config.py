@@ -5,11 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, unknown_name
 from rtaw_marl.policies.config import BaselinesConfig
 from rtaw_marl.utils.checks import at_least, check_fields
 
-__all__ = ["LORR_DEFAULT", "PLANNERS", "LoRRConfig"]
+__all__ = ["LORR_DEFAULT", "OVERFLOWS", "PLANNERS", "LoRRConfig"]
 
 #: ``policy=lorr_default``: the start kit's own scheduler (its C++ entry).
 LORR_DEFAULT = "lorr_default"
@@ -17,6 +17,11 @@ LORR_DEFAULT = "lorr_default"
 #: ``planner=...``: the kit's default planner, or the own executor (``navigator=pibt``'s
 #: defaults: LoRR's action model and traffic-flow guidance) under the kit's scheduler.
 PLANNERS = ("default", "pibt")
+
+#: ``overflow=...``: ``wait`` (the robots a scheduler could not serve in time wait for
+#: the next timestep) or ``nearest`` (they take the nearest open task:
+#: :func:`rtaw_marl.integrations.lorr.overflow.nearest_pairs`).
+OVERFLOWS = ("wait", "nearest")
 
 #: The largest value ``lifelong`` takes for a count or a time limit (a C++ ``int``).
 _INT_MAX = 2**31 - 1
@@ -51,6 +56,12 @@ class LoRRConfig:
             scheduler (LoRR's planner track; ``policy`` must be ``lorr_default``).
         share: The part of ``plan_time_ms`` the scheduler may use (the kit's default
             scheduler takes half); robots not served in it wait for the next timestep.
+        overflow: What the robots an rtaw_marl scheduler could not serve in its share
+            do: ``wait`` for the next timestep (counted as ``deferred``), or take the
+            ``nearest`` open task by grid distance (counted as ``overflowed``; the
+            scheduler stops at 90% of its share to leave time for it:
+            :mod:`rtaw_marl.integrations.lorr.overflow`). ``pair_greedy`` serves every
+            robot each timestep and ``lorr_default`` is the kit's own: neither stops.
         output: Where ``results.json`` goes; ``None``: the run folder.
         kit: The start kit's sources; ``None``: ``RTAW_LORR_KIT`` or ``../shared``.
         cache: Where builds are kept; ``None``: ``RTAW_LORR_CACHE`` or
@@ -71,6 +82,7 @@ class LoRRConfig:
     plan_time_ms: int = 1000
     preprocess_time_ms: int = 30000
     share: float = 0.5
+    overflow: str = "wait"
     planner: str = "default"
     output: str | None = None
     kit: str | None = None
@@ -95,3 +107,5 @@ class LoRRConfig:
             raise ConfigError(f"planner must be one of {', '.join(PLANNERS)}, got {self.planner!r}")
         if not 0 < float(self.share) <= 1:
             raise ConfigError(f"share must be in (0, 1], got {self.share}")
+        if self.overflow not in OVERFLOWS:
+            raise unknown_name("overflow", self.overflow, list(OVERFLOWS))

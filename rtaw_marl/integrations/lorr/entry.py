@@ -49,6 +49,7 @@ class RunSpec:
         baselines: The rules' parameters (``BaselinesConfig`` keys).
         share: The part of LoRR's time limit the scheduler may use per timestep (its
             default scheduler takes half).
+        overflow: What robots not served in time do (``wait`` or ``nearest``).
         timesteps: LoRR's ``simulationTime``: the stats are written at the last one.
         stats: Where the scheduler writes its counts (JSON).
         seed: The policy's tie-breaking seed.
@@ -64,6 +65,7 @@ class RunSpec:
     candidates: int | None = None
     baselines: dict[str, Any] = field(default_factory=dict)
     share: float = 0.5
+    overflow: str = "wait"
     seed: int = 0
     search_path: str | None = None
 
@@ -105,7 +107,7 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler | PairScheduler:
         if spec.search_path is not None and spec.search_path not in sys.path:
             sys.path.append(spec.search_path)
         _, user_policy = import_policy(spec.policy)
-        return PolicyScheduler(user_policy, sim, seed=spec.seed)
+        return PolicyScheduler(user_policy, sim, seed=spec.seed, overflow=spec.overflow)
     if spec.policy in ("checkpoint", "pretrained", "matched"):
         from rtaw_marl.policies.network import load_policy
 
@@ -116,7 +118,7 @@ def build_scheduler(spec: RunSpec) -> PolicyScheduler | PairScheduler:
             policy = MatchedPolicy(policy)
     else:
         policy = make_baseline(spec.policy, params=BaselinesConfig(**spec.baselines))
-    return PolicyScheduler(policy, sim, seed=spec.seed)
+    return PolicyScheduler(policy, sim, seed=spec.seed, overflow=spec.overflow)
 
 
 class pyTaskScheduler:

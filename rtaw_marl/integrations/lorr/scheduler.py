@@ -16,7 +16,9 @@ LoRR's rules (its ``TaskManager``): one robot per task, and a robot keeps its ta
 it has reached the first errand. This scheduler never reassigns: a robot with a task
 keeps it, a free robot gets one of the unassigned tasks or none (``-1``). When the
 timestep's share of the time limit runs out, the robots not yet served stay free until
-the next timestep (counted as ``deferred``), as LoRR's default scheduler does.
+the next timestep (counted as ``deferred``), as LoRR's default scheduler does; with
+``overflow="nearest"`` they take the nearest open task instead
+(:mod:`~rtaw_marl.integrations.lorr.overflow`, counted as ``overflowed``).
 
 Locations are LoRR's linearized cells, ``row x width + column``; a task's errands are
 visited in order; a task of more than two errands is one pickup (the first) and one
@@ -31,6 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rtaw_marl.errors import unknown_name
+from rtaw_marl.integrations.lorr.overflow import OVERFLOWS, RESERVE, nearest_pairs
 from rtaw_marl.policies.base import Policy
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.external import DecisionState, load_decisions
@@ -70,6 +74,7 @@ class SchedulerStats:
     calls: int = 0
     decisions: int = 0
     deferred: int = 0
+    overflowed: int = 0
     reassigned: int = 0
     seconds: float = 0.0
     max_call_s: float = 0.0
@@ -86,6 +91,12 @@ class PolicyScheduler:
             ``sim.num_tasks`` above ``M``; reset here.
         seed: Seeds the policy's tie-breaking.
         clock: Seconds (``time.perf_counter``).
+        overflow: The robots not served in time: ``wait`` for the next timestep, or take
+            the ``nearest`` open task (the policy then stops at ``1 - RESERVE`` of the
+            budget).
+
+    Raises:
+        ConfigError: An unknown ``overflow`` (the message lists them).
     """
 
     def __init__(
@@ -94,8 +105,11 @@ class PolicyScheduler:
         sim: WarehouseSim,
         seed: int = 0,
         clock: Callable[[], float] = time.perf_counter,
+        overflow: str = "wait",
     ) -> None:
-        self.policy, self.sim, self.clock = policy, sim, clock
+        if overflow not in OVERFLOWS:
+            raise unknown_name("overflow", overflow, list(OVERFLOWS))
+        self.policy, self.sim, self.clock, self.overflow = policy, sim, clock, overflow
         self.width = sim.layout.width
         sim.reset(seed)
         if not sim.done:
@@ -160,7 +174,8 @@ class PolicyScheduler:
             budget_s: Seconds left for scheduling (robots not served by then wait).
         """
         start = self.clock()
-        deadline = start + budget_s
+        keep = RESERVE if self.overflow == "nearest" else 0.0
+        deadline = start + (1.0 - keep) * budget_s
         schedule = np.asarray(step.schedule, dtype=np.int64)
         self._sync_pool(step)
         busy = np.flatnonzero(schedule >= 0)
@@ -178,8 +193,7 @@ class PolicyScheduler:
         sim = self.sim
         while not sim.done and sim.time <= now and sim.queue_mask.any():
             if self.clock() > deadline:
-                waiting = np.flatnonzero(sim.robot_free_at <= now)
-                self.stats.deferred += int((proposed[waiting] < 0).sum())
+                self._overflow(now, proposed)
                 return
             slot = int(self.policy.act_sim(sim))
             task = int(self._slot_task[slot])
@@ -187,6 +201,21 @@ class PolicyScheduler:
             self.stats.decisions += 1
             sim.step(slot)
             self._release(task)
+
+    def _overflow(self, now: int, proposed: np.ndarray) -> None:
+        """The robots free and not served when the clock ran out: they wait, or take the
+        nearest open tasks (the mirror is not stepped: the next timestep loads them busy
+        from LoRR's schedule)."""
+        sim = self.sim
+        waiting = np.flatnonzero((sim.robot_free_at <= now) & (proposed < 0))
+        if self.overflow == "nearest" and len(waiting):
+            open_slots = np.flatnonzero(sim.queue_mask)
+            got = nearest_pairs(sim.robot_xy[waiting], sim.queue_rows[open_slots, :2])
+            served = got >= 0
+            proposed[waiting[served]] = self._slot_task[open_slots[got[served]]]
+            self.stats.overflowed += int(served.sum())
+            waiting = waiting[~served]
+        self.stats.deferred += len(waiting)
 
     # ------------------------------------------------------------------ the pool
     def _sync_pool(self, step: Timestep) -> None:
@@ -306,6 +335,7 @@ def stats_dict(stats: SchedulerStats) -> Mapping[str, object]:
         "calls": stats.calls,
         "decisions": stats.decisions,
         "deferred": stats.deferred,
+        "overflowed": stats.overflowed,
         "reassigned": stats.reassigned,
         "seconds": round(stats.seconds, 3),
         "max_call_s": round(stats.max_call_s, 4),
