@@ -4,10 +4,12 @@ Usage::
 
     python -m benchmarks.scripts.bench_matched                      # M = 1,000 and 5,000
     python -m benchmarks.scripts.bench_matched --robots 10000 --horizon 200
+    python -m benchmarks.scripts.bench_matched --policy lorr_warehouse_plus --only matched
 
 LoRR's ``warehouse_large`` problem as ``scenario=lorr`` runs it (turns, guidance,
 reassignment; the first ``M`` start cells of its agent file, random distinct cells
-beyond 5,000), one core, the shipped ``generalist_plus`` with ``candidates=32``: each
+beyond 5,000), one core, a shipped network (``--policy``, by default
+``generalist_plus``; every RTAW+ network costs the same) with ``candidates=32``: each
 free robot's decision a network call (``pretrained``), or every free robot of a timestep
 from one call and a greedy matching (``matched``). Printed per M and policy: the median
 and 90th percentile over timesteps ``--warmup`` to ``--horizon`` of the scheduler's time
@@ -36,14 +38,16 @@ PROBLEM = (
 )
 
 
-def measure(m: int, matched: bool, horizon: int, warmup: int) -> dict[str, float]:
+def measure(
+    m: int, matched: bool, horizon: int, warmup: int, name: str = "generalist_plus"
+) -> dict[str, float]:
     """Per-timestep scheduler and total milliseconds (median, p90) of one episode."""
     scenario = lorr_scenario(
         PROBLEM, num_robots=m, horizon=horizon, starts="file" if m <= 5000 else "random",
         navigator={"name": "pibt", "record": False},
     )  # fmt: skip
     sim = build_sim(scenario.spec())
-    network = load_policy("generalist_plus", candidates=32)
+    network = load_policy(name, candidates=32)
     policy = MatchedPolicy(network) if matched else network
     sim.reset(0)
     policy.reset(0)
@@ -80,6 +84,8 @@ def main() -> None:
     parser.add_argument("--robots", type=int, nargs="+", default=[1000, 5000])
     parser.add_argument("--horizon", type=int, default=300)
     parser.add_argument("--warmup", type=int, default=100)
+    parser.add_argument("--policy", default="generalist_plus", help="a shipped network")
+    parser.add_argument("--only", choices=("robot_by_robot", "matched"), default=None)
     args = parser.parse_args()
     torch.set_num_threads(1)
     print(
@@ -89,7 +95,9 @@ def main() -> None:
     print("|---:|---|---:|---:|---:|---:|---:|")
     for m in args.robots:
         for matched in (False, True):
-            r = measure(m, matched, args.horizon, args.warmup)
+            if args.only is not None and matched != (args.only == "matched"):
+                continue
+            r = measure(m, matched, args.horizon, args.warmup, args.policy)
             name = "matched" if matched else "robot by robot"
             print(
                 f"| {m:,} | {name} | {r['sched_median']:.1f}, {r['sched_p90']:.1f} | "

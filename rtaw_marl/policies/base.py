@@ -26,7 +26,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from rtaw_marl.sim.core import WarehouseSim
 
-__all__ = ["Policy", "simulator_of"]
+__all__ = ["PlansAhead", "Policy", "simulator_of"]
 
 
 @runtime_checkable
@@ -47,6 +47,17 @@ class Policy(Protocol):
 
     def act(self, observation: Mapping[str, Any]) -> int:
         """The slot for the robot whose ``warehouse_v1`` observation this is."""
+
+
+@runtime_checkable
+class PlansAhead(Protocol):
+    """A policy that decides several free robots of a timestep at once
+    (:class:`~rtaw_marl.policies.matched.MatchedPolicy`): a caller out of time can send
+    the decisions already made instead of letting those robots wait."""
+
+    def pending(self, sim: WarehouseSim) -> tuple[Any, Any]:
+        """The robots decided this timestep and not yet served (``int64 [P]``) and their
+        slots (``int64 [P]``), each slot's task still queued."""
 
 
 def simulator_of(source: Any) -> WarehouseSim:

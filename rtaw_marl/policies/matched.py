@@ -15,6 +15,10 @@ decides them together, at the first decision of each timestep:
    and task at most once: :func:`~rtaw_marl.policies.pairs.greedy_pairs`) turns the
    scores into tasks, so two robots never both want the nearest task of both.
 
+A caller out of time (LoRR's clock) sends the matches not yet taken as they are
+(:meth:`MatchedPolicy.pending`): a batch's robots are then all served, though the
+simulator selects robots by id and a batch is chosen by place.
+
 The robots then take their matches as the simulator selects them. A timestep that frees
 more than :data:`BATCH` robots (every robot at t = 0) is matched a batch at a time, each
 call bounded so LoRR's clock can stop between them: the selected robot with the free
@@ -116,6 +120,18 @@ class MatchedPolicy:
                 return slot
         self.alone += 1
         return self.policy.act_sim(sim)
+
+    def pending(self, sim: WarehouseSim) -> tuple[np.ndarray, np.ndarray]:
+        """The robots matched this timestep and not yet served, and their slots
+        (``int64 [P]`` each, by robot), the matched tasks still queued: decisions made,
+        which a caller out of time (LoRR's clock) may send as they are."""
+        plan = self._plan[1] if self._plan is not None and self._plan[0] == (
+            id(sim), sim.time) else {}  # fmt: skip
+        robots = np.fromiter(plan.keys(), dtype=np.int64, count=len(plan))
+        pairs = np.array(list(plan.values()), dtype=np.int64).reshape(-1, 2)
+        live = sim.queue_mask[pairs[:, 0]] & (sim.queue_ids[pairs[:, 0]] == pairs[:, 1])
+        order = np.argsort(robots[live], kind="stable")
+        return robots[live][order], pairs[live, 0][order]
 
     def _batch(self, sim: WarehouseSim) -> np.ndarray:
         """``int64 [<= BATCH]``: the selected robot, then the free robots not yet matched

@@ -20,6 +20,7 @@ from rtaw_marl.integrations.lorr.entry import RunSpec, build_scheduler
 from rtaw_marl.integrations.lorr.scheduler import PolicyScheduler, Timestep
 from rtaw_marl.sim.distances import DistanceModel
 from rtaw_marl.sim.lorr import read_problem
+from rtaw_marl.sim.maps import map_path
 
 pytestmark = pytest.mark.integration
 
@@ -156,6 +157,42 @@ def test_learned_policy_schedules(tmp_path: Path, kind: str) -> None:
     assert type(scheduler.policy).__name__ == (
         "MatchedPolicy" if kind == "matched" else "NetworkPolicy"
     )
+
+
+@pytest.mark.parametrize("overflow", ["wait", "nearest"])
+def test_a_matched_batch_cut_by_the_clock_is_sent_whole(overflow: str) -> None:
+    """At t = 0 (100 robots free) the clock runs out after a few decisions: every robot
+    of every batch matched so far takes its match (the simulator selects robots by id,
+    a batch is chosen by place, so most were not selected yet), the others wait or take
+    the nearest task, and LoRR accepts the schedule."""
+    pytest.importorskip("torch")
+    problem = map_path("random_32_32_20_100.json")
+    scheduler = _scheduler(
+        problem, "matched", source="generalist_plus", candidates=8, overflow=overflow
+    )
+    batches: list[int] = []
+    match = scheduler.policy.match
+
+    def spy(sim: object, robots: np.ndarray, exclude: np.ndarray | None = None) -> dict:
+        got = match(sim, robots, exclude)
+        batches.extend(got)
+        return got
+
+    scheduler.policy.match = spy
+    ticks = iter(range(10**6))
+    scheduler.clock = lambda: float(next(ticks))  # one tick a call: 3 decisions
+    lorr = FakeLoRR(problem)
+    proposed = np.array(scheduler.plan(lorr.step(), 3.0))
+    stats = scheduler.stats
+    assert 32 < len(batches) <= 3 * 32
+    assert (proposed[batches] >= 0).all()
+    assert stats.decisions == len(batches) < 100
+    if overflow == "wait":
+        assert stats.deferred == 100 - len(batches) == int((proposed < 0).sum())
+    else:
+        assert stats.overflowed == 100 - len(batches) and stats.deferred == 0
+    lorr.apply(proposed.tolist(), scheduler.sim.distance_model)
+    assert lorr.errors == []
 
 
 def test_mpdm_takes_the_nearest_open_task(tmp_path: Path) -> None:

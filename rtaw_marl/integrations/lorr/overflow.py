@@ -26,7 +26,7 @@ __all__ = ["OVERFLOWS", "RESERVE", "nearest_pairs"]
 #: The part of the scheduler's budget kept back for ``overflow=nearest``.
 RESERVE = 0.1
 #: Pickups considered per robot (a robot whose ``_K`` nearest are all taken waits).
-_K = 8
+_K = 32
 
 
 def nearest_pairs(robot_xy: np.ndarray, task_xy: np.ndarray, k: int = _K) -> np.ndarray:

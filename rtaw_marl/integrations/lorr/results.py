@@ -30,10 +30,10 @@ SIMULATOR = "lorr-start-kit-2.1.2"
 #: cache).
 SETTING_KEYS = (
     "timesteps", "plan_time_ms", "preprocess_time_ms", "share", "candidates", "baselines",
-    "planner",
+    "planner", "overflow",
 )  # fmt: skip
-#: A key results files written before it existed lack: its value then.
-_BEFORE = {"planner": "default"}
+#: Keys results files written before they existed lack: their values then.
+_BEFORE = {"planner": "default", "overflow": "wait"}
 
 
 def write_results(

@@ -15,8 +15,9 @@ fast path every policy has, each choice taking its task out of the queue.
 LoRR's rules (its ``TaskManager``): one robot per task, and a robot keeps its task once
 it has reached the first errand. This scheduler never reassigns: a robot with a task
 keeps it, a free robot gets one of the unassigned tasks or none (``-1``). When the
-timestep's share of the time limit runs out, the robots not yet served stay free until
-the next timestep (counted as ``deferred``), as LoRR's default scheduler does; with
+timestep's share of the time limit runs out, the robots a policy has decided already (a
+matched batch) take their tasks, and the others stay free until the next timestep
+(counted as ``deferred``), as LoRR's default scheduler does; with
 ``overflow="nearest"`` they take the nearest open task instead
 (:mod:`~rtaw_marl.integrations.lorr.overflow`, counted as ``overflowed``).
 
@@ -35,7 +36,7 @@ import numpy as np
 
 from rtaw_marl.errors import unknown_name
 from rtaw_marl.integrations.lorr.overflow import OVERFLOWS, RESERVE, nearest_pairs
-from rtaw_marl.policies.base import Policy
+from rtaw_marl.policies.base import PlansAhead, Policy
 from rtaw_marl.sim.core import WarehouseSim
 from rtaw_marl.sim.external import DecisionState, load_decisions
 from rtaw_marl.sim.layout import Layout
@@ -203,13 +204,20 @@ class PolicyScheduler:
             self._release(task)
 
     def _overflow(self, now: int, proposed: np.ndarray) -> None:
-        """The robots free and not served when the clock ran out: they wait, or take the
+        """The robots free and not served when the clock ran out: those the policy has
+        decided already (a matched batch) take their tasks, the others wait or take the
         nearest open tasks (the mirror is not stepped: the next timestep loads them busy
         from LoRR's schedule)."""
         sim = self.sim
+        open_slot = sim.queue_mask.copy()
+        if isinstance(self.policy, PlansAhead):
+            robots, slots = self.policy.pending(sim)
+            proposed[robots] = self._slot_task[slots]
+            open_slot[slots] = False
+            self.stats.decisions += len(robots)
         waiting = np.flatnonzero((sim.robot_free_at <= now) & (proposed < 0))
         if self.overflow == "nearest" and len(waiting):
-            open_slots = np.flatnonzero(sim.queue_mask)
+            open_slots = np.flatnonzero(open_slot)
             got = nearest_pairs(sim.robot_xy[waiting], sim.queue_rows[open_slots, :2])
             served = got >= 0
             proposed[waiting[served]] = self._slot_task[open_slots[got[served]]]
