@@ -4,9 +4,13 @@ Usage::
 
     python -m benchmarks.scripts.gridlock                              # turns, guidance 1
     python -m benchmarks.scripts.gridlock --guidance 0 --horizon 5000  # without guidance
+    python -m benchmarks.scripts.gridlock --policy pair_greedy         # the 2024 winner's rule
+    python -m benchmarks.scripts.gridlock --matched lorr_warehouse_plus  # a network, batched
 
 LoRR's ``warehouse_large`` with 10,000 robots (the first 5,000 start cells of its agent
-file, random distinct cells beyond; its task file and reveal window), MPDM, one core.
+file, random distinct cells beyond; its task file and reveal window), MPDM (or another
+rule, or a learned policy deciding each timestep's robots together with ``candidates=32``:
+``--matched NAME``), one core.
 Prints the tasks finished per 500 timesteps, the best 1,000-timestep window (sliding by
 100) and the last one, their ratio (gridlock: the last window far below the best), the
 longest any robot waited for its goal to change (``max_stall``) and the wall time. With
@@ -24,6 +28,7 @@ import numpy as np
 
 from benchmarks.scripts.bench_pibt import PROBLEM
 from rtaw_marl.policies import make_baseline
+from rtaw_marl.policies.base import Policy
 from rtaw_marl.scenarios import lorr_scenario
 from rtaw_marl.sim.builder import build_sim
 from rtaw_marl.utils.atomic import atomic_write
@@ -45,7 +50,7 @@ def run(
     scenario = lorr_scenario(PROBLEM, num_robots=robots, horizon=horizon, starts=starts,
                              navigator=nav)  # fmt: skip
     sim = build_sim(scenario.spec())
-    rule = make_baseline(policy)
+    rule = _policy(policy)
     sim.reset(0)
     began = time.perf_counter()
     while not sim.done:
@@ -64,6 +69,19 @@ def run(
     }  # fmt: skip
 
 
+def _policy(name: str) -> Policy:
+    """A rule by name, or ``matched:NAME``: a learned policy deciding in batches."""
+    if not name.startswith("matched:"):
+        return make_baseline(name)
+    import torch
+
+    from rtaw_marl.policies.matched import MatchedPolicy
+    from rtaw_marl.policies.network import load_policy
+
+    torch.set_num_threads(1)
+    return MatchedPolicy(load_policy(name.split(":", 1)[1], candidates=32))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robots", type=int, default=10_000)
@@ -73,12 +91,14 @@ def main() -> None:
     parser.add_argument("--guide-replans", type=int, default=0)
     parser.add_argument("--patience", type=int, default=None, help="priority rotation")
     parser.add_argument("--policy", default="mpdm")
+    parser.add_argument("--matched", default=None, help="a learned policy, batched (k = 32)")
     parser.add_argument("--output", type=Path)
     args = parser.parse_args()
     if args.horizon < WINDOW or args.horizon % BIN:
         parser.error(f"--horizon must be a multiple of {BIN} and at least {WINDOW}")
+    policy = args.policy if args.matched is None else f"matched:{args.matched}"
     r = run(
-        args.robots, args.horizon, args.turns, args.guidance, args.policy,
+        args.robots, args.horizon, args.turns, args.guidance, policy,
         args.guide_replans, args.patience,
     )  # fmt: skip
     model = "turns" if r["turns"] else "no turns"

@@ -190,7 +190,8 @@ def test_a_matched_batch_cut_by_the_clock_is_sent_whole(overflow: str) -> None:
     if overflow == "wait":
         assert stats.deferred == 100 - len(batches) == int((proposed < 0).sum())
     else:
-        assert stats.overflowed == 100 - len(batches) and stats.deferred == 0
+        assert stats.overflowed == 100 - len(batches)
+        assert stats.deferred == 0
     lorr.apply(proposed.tolist(), scheduler.sim.distance_model)
     assert lorr.errors == []
 
