@@ -25,35 +25,41 @@ __all__ = ["OVERFLOWS", "RESERVE", "nearest_pairs"]
 
 #: The part of the scheduler's budget kept back for ``overflow=nearest``.
 RESERVE = 0.1
-#: Pickups considered per robot (a robot whose ``_K`` nearest are all taken waits).
+#: Pickups considered per robot and round (a robot whose ``_K`` nearest went to others
+#: chooses again among the tasks left).
 _K = 32
 
 
 def nearest_pairs(robot_xy: np.ndarray, task_xy: np.ndarray, k: int = _K) -> np.ndarray:
     """Each robot's task by grid distance, greedily: ``int64 [R]`` indices into
-    ``task_xy``, ``-1`` for a robot whose ``k`` nearest tasks went to others.
+    ``task_xy``, ``-1`` only when there are fewer tasks than robots.
 
     Robots choose in the order of the distance to their nearest task (ties to the lower
-    row), each taking its nearest task not yet taken, so a task goes to the robot
-    nearest it among those that want it first.
+    row), each taking its nearest task not yet taken among its ``k`` nearest, so a task
+    goes to the robot nearest it among those that want it first. Robots whose ``k``
+    nearest all went to others choose again, the same way, among the tasks left.
 
     Args:
         robot_xy: ``int [R, 2]`` the robots' cells.
         task_xy: ``int [T, 2]`` the tasks' pickup cells.
-        k: Tasks considered per robot.
+        k: Tasks considered per robot and round.
     """
-    robots, tasks = len(robot_xy), len(task_xy)
-    got = np.full(robots, -1, dtype=np.int64)
-    if robots == 0 or tasks == 0:
-        return got
-    kk = min(int(k), tasks)
-    dist, idx = cKDTree(np.asarray(task_xy, dtype=np.float64)).query(
-        np.asarray(robot_xy, dtype=np.float64), k=kk, p=1
-    )
-    idx = np.asarray(idx, dtype=np.int64).reshape(robots, kk)
-    first = np.asarray(dist, dtype=np.float64).reshape(robots, kk)[:, 0]
-    order = np.argsort(first, kind="stable")
-    _take_nearest(idx, order, np.zeros(tasks, dtype=np.bool_), got)
+    got = np.full(len(robot_xy), -1, dtype=np.int64)
+    taken = np.zeros(len(task_xy), dtype=np.bool_)
+    left = np.arange(len(robot_xy))
+    while len(left) and not taken.all():
+        free = np.flatnonzero(~taken)
+        kk = min(int(k), len(free))
+        dist, idx = cKDTree(np.asarray(task_xy, dtype=np.float64)[free]).query(
+            np.asarray(robot_xy, dtype=np.float64)[left], k=kk, p=1
+        )
+        idx = free[np.asarray(idx, dtype=np.int64).reshape(len(left), kk)]
+        first = np.asarray(dist, dtype=np.float64).reshape(len(left), kk)[:, 0]
+        sub = np.full(len(left), -1, dtype=np.int64)
+        # Each round serves at least its first robot: the loop ends.
+        _take_nearest(idx, np.argsort(first, kind="stable"), taken, sub)
+        got[left] = sub
+        left = left[sub < 0]
     return got
 
 
