@@ -63,7 +63,9 @@ _STATE_ARRAYS = (
     "task_ttd", "task_finished", "task_robot", "queue_ids", "robot_xy", "robot_free_at",
     "queue_mask", "queue_rows", "queue_length", "_owed", "queue_holder", "task_moved",
 )  # fmt: skip
-_STATE_SCALARS = ("robot", "time", "decisions", "done", "truncated", "last_ttd", "_next_task")
+_STATE_SCALARS = (
+    "robot", "time", "decisions", "_retaken", "done", "truncated", "last_ttd", "_next_task",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -231,6 +233,7 @@ class WarehouseSim(Reassignment):
         self._executor.reset(starts, records, noise_rng)
         self._owed = np.zeros(m, dtype=bool)
         self.decisions = 0
+        self._retaken = 0  # decisions that took a task given back (reassignment)
         self.done = False
         self.truncated = False
         self.last_ttd = 0.0
@@ -357,6 +360,10 @@ class WarehouseSim(Reassignment):
         robot, now = self.robot, self.time
         self._clock.charge(now)
         task = int(self.queue_ids[slot])
+        # A task given back and taken again is no new task of the stream: the episode's
+        # num_tasks counts tasks, not decisions (a rule re-pairing robots each timestep
+        # makes several decisions per task).
+        self._retaken += int(not np.isnan(self.task_moved[task]))
         dist = self._dist if self._dist is not None else self.robot_distances()
         ttd = float(dist[slot])
         length = float(self.queue_length[slot])
@@ -385,7 +392,7 @@ class WarehouseSim(Reassignment):
 
         self.decisions += 1
         self.last_ttd = ttd
-        if self.decisions >= self._num_decisions:
+        if self.decisions - self._retaken >= self._num_decisions:
             self.done = True
             self.truncated = self._paper or self._horizon is not None
             self._dist = None  # the acting robot has moved: its cached distances are stale
