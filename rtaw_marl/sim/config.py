@@ -33,7 +33,8 @@ class SimConfig:
         num_robots: ``M``, at least 1.
         num_tasks: Tasks served (``drain``) or decisions taken (``paper``) per episode;
             with ``horizon``, the most tasks the stream holds (the episode ends sooner
-            if they are all assigned).
+            if they are all assigned; with ``reassign`` a task given back and taken
+            again is counted once).
         queue_len: ``N``, the number of visible queued tasks, at least 1.
         episode_mode: ``"drain"``, ``"paper"`` or ``"horizon"``: decisions until the
             timestep ``horizon`` (throughput: the tasks finished by then).
