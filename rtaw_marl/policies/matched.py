@@ -90,7 +90,6 @@ class MatchedPolicy:
         del seed
         self._plan: tuple[tuple[int, float], dict[int, tuple[int, int]]] | None = None
         self._asked = np.zeros(0, dtype=bool)  # robots matched this timestep
-        self._promised = np.zeros(0, dtype=bool)  # slots matched to robots not yet served
         #: Decisions served by a match, and decided alone (no match, or it was taken).
         self.served = self.alone = 0
 
@@ -102,19 +101,17 @@ class MatchedPolicy:
         key = (id(sim), sim.time)
         if self._plan is None or self._plan[0] != key:
             self._plan, self._asked = (key, {}), np.zeros(sim.num_robots, dtype=bool)
-            self._promised = np.zeros(sim.queue_len, dtype=bool)
         plan = self._plan[1]
         if not self._asked[sim.robot]:
             robots = self._batch(sim)
             self._asked[robots] = True
-            got = self.match(sim, robots, exclude=self._promised)
-            for slot, _ in got.values():
-                self._promised[slot] = True
-            plan.update(got)
+            # The slots promised to robots of earlier batches, not yet served.
+            promised = np.zeros(sim.queue_len, dtype=bool)
+            promised[_pairs(plan)[1]] = True
+            plan.update(self.match(sim, robots, exclude=promised))
         planned = plan.pop(sim.robot, None)
         if planned is not None:
             slot, task = planned
-            self._promised[slot] = False
             if sim.queue_ids[slot] == task and sim.queue_mask[slot]:
                 self.served += 1
                 return slot
@@ -125,13 +122,11 @@ class MatchedPolicy:
         """The robots matched this timestep and not yet served, and their slots
         (``int64 [P]`` each, by robot), the matched tasks still queued: decisions made,
         which a caller out of time (LoRR's clock) may send as they are."""
-        plan = self._plan[1] if self._plan is not None and self._plan[0] == (
-            id(sim), sim.time) else {}  # fmt: skip
-        robots = np.fromiter(plan.keys(), dtype=np.int64, count=len(plan))
-        pairs = np.array(list(plan.values()), dtype=np.int64).reshape(-1, 2)
-        live = sim.queue_mask[pairs[:, 0]] & (sim.queue_ids[pairs[:, 0]] == pairs[:, 1])
+        current = self._plan is not None and self._plan[0] == (id(sim), sim.time)
+        robots, slots, tasks = _pairs(self._plan[1] if current else {})  # type: ignore[index]
+        live = sim.queue_mask[slots] & (sim.queue_ids[slots] == tasks)
         order = np.argsort(robots[live], kind="stable")
-        return robots[live][order], pairs[live, 0][order]
+        return robots[live][order], slots[live][order]
 
     def _batch(self, sim: WarehouseSim) -> np.ndarray:
         """``int64 [<= BATCH]``: the selected robot, then the free robots not yet matched
@@ -215,6 +210,13 @@ class MatchedPolicy:
             f"{self.name} acts on the simulator only (it matches every free robot at "
             "once); evaluate it with rtaw-eval or act_sim"
         )
+
+
+def _pairs(plan: Mapping[int, tuple[int, int]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A plan as arrays: its robots, their slots and tasks (``int64 [P]`` each)."""
+    robots = np.fromiter(plan.keys(), dtype=np.int64, count=len(plan))
+    pairs = np.array(list(plan.values()), dtype=np.int64).reshape(-1, 2)
+    return robots, pairs[:, 0], pairs[:, 1]
 
 
 def nearest_slots(key: np.ndarray, k: int) -> np.ndarray:
