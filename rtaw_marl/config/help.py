@@ -48,6 +48,7 @@ GROUP_DOCS: dict[str, str] = {
     "scenario": "a named setting: layout, navigator, tasks and fleet at once",
     "row": "a row of the paper's tables: its scenario and shipped policies",
     "experiment": "a whole experiment: fixed values and a sweep (-m)",
+    "recipe": "a preset of training keys for a purpose (new_map: a map of your own)",
     "model": "the policy network",
     "algo": "PPO's hyperparameters",
     "collector": "where episodes are collected: local processes or Ray",
