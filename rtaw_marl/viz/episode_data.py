@@ -8,10 +8,18 @@ they would not fit in a page. What the page gets instead, per episode:
   :data:`MOVES` (wait, +x, -x, +y, -y), robot by robot: a robot's consecutive moves
   repeat, so this order deflates to 2.2 bits an entry at 10,000 robots, 18% less than
   timestep by timestep. The page rebuilds positions from keyframes it computes on load;
-* ``tasks``: ``int32 [K, 9]`` ``(ox, oy, dx, dy, robot, arrival, assigned, pickup,
-  delivered)`` of every task in the schedule (and those robots still hold at the end,
-  :func:`open_tasks`, with ``T + 1`` for what did not happen), numbered by assignment
-  order (the task ids of LoRR's output format, :mod:`rtaw_marl.integrations.lorr.output`);
+* ``tasks``: ``int32 [K, 10]`` ``(ox, oy, dx, dy, robot, arrival, assigned, pickup,
+  delivered, id)`` of every task in the schedule (and those robots still hold at the
+  end, :func:`open_tasks`, with ``T + 1`` for what did not happen), in assignment order.
+  ``id`` is the task's index in the episode's task stream (``Schedule.task_ids``): the
+  same task has the same id in every episode of one seed, and for a LoRR problem it is
+  LoRR's task id, the ids of LoRR's output format (:mod:`rtaw_marl.integrations.lorr.output`
+  writes them, :mod:`rtaw_marl.viz.schedule_file` reads them). A schedule without
+  stream ids numbers its tasks by assignment order;
+* ``headings`` and ``turns`` when robots turn (``Schedule.headings``): ``uint8 [M]``
+  each robot's heading at ``t = 0`` (0 east, 1 south, 2 west, 3 north) and ``uint8
+  [M, T]`` its quarter turns from ``t`` to ``t + 1`` (0 none, 1 clockwise, 3
+  counter-clockwise), robot by robot as the moves;
 * ``congestion``: ``[B, H * W]`` per time bin, how many timesteps a robot with a task
   stood still on each cell (a wait: blocked by traffic, or by its own plan);
 * ``delivered``: ``int32 [T + 1]`` tasks delivered at each timestep (the throughput).
@@ -37,6 +45,7 @@ from rtaw_marl.sim.mapf.schedule import Schedule
 __all__ = [
     "CONGESTION_BINS",
     "MOVES",
+    "TASK_COLUMNS",
     "EpisodeArrays",
     "congestion",
     "encode",
@@ -45,10 +54,15 @@ __all__ = [
     "move_codes",
     "open_tasks",
     "pack",
+    "turn_codes",
 ]
 
 MOVES: tuple[tuple[int, int], ...] = ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))
 """``(dx, dy)`` of move code ``0 .. 4``: wait, +x, -x, +y, -y."""
+
+TASK_COLUMNS = 10
+"""Columns of a task row: ``(ox, oy, dx, dy, robot, arrival, assigned, pickup, delivered,
+id)``."""
 
 CONGESTION_BINS = 100
 """Time bins of the congestion heat map (fewer when the episode is shorter)."""
@@ -67,6 +81,8 @@ class EpisodeArrays:
     congestion: np.ndarray
     bin_size: int
     delivered: np.ndarray
+    headings: np.ndarray | None = None  # [M]
+    turns: np.ndarray | None = None  # [T, M]
 
 
 def layout_cells(layout: Layout) -> np.ndarray:
@@ -98,8 +114,32 @@ def move_codes(positions: np.ndarray) -> np.ndarray:
     return codes
 
 
+def turn_codes(headings: np.ndarray) -> np.ndarray:
+    """``uint8 [T, M]`` quarter turns (0 none, 1 clockwise, 3 counter-clockwise) of
+    headings ``[T + 1, M]`` (0..3: east, south, west, north).
+
+    Raises:
+        ConfigError: A heading is not 0..3, or a robot turns half round in a timestep.
+    """
+    if ((headings < 0) | (headings > 3)).any():
+        t, m = np.argwhere((headings < 0) | (headings > 3))[0]
+        raise ConfigError(f"robot {m} has heading {headings[t, m]} at timestep {t}, not 0..3")
+    steps = headings.shape[0] - 1
+    codes = np.zeros((steps, headings.shape[1]), dtype=np.uint8)
+    for lo in range(0, steps, _CHUNK):
+        hi = min(lo + _CHUNK, steps)
+        codes[lo:hi] = np.diff(headings[lo : hi + 1].astype(np.int8), axis=0) % 4
+    if (codes == 2).any():
+        t, m = np.argwhere(codes == 2)[0]
+        raise ConfigError(f"robot {m} turns half round at timestep {t} (one quarter at most)")
+    return codes
+
+
 def _by_assignment(schedule: Schedule) -> np.ndarray:
+    """``int32 [K, 10]`` the schedule's task rows in assignment order (ids ``-1`` when the
+    schedule has no stream ids)."""
     order = np.argsort(schedule.task_assigned, kind="stable")
+    ids = np.full(len(order), -1) if schedule.task_ids is None else schedule.task_ids[order]
     return np.column_stack(
         [
             schedule.tasks[order],
@@ -108,6 +148,7 @@ def _by_assignment(schedule: Schedule) -> np.ndarray:
             schedule.task_assigned[order],
             schedule.task_pickup[order],
             schedule.task_delivered[order],
+            ids,
         ]
     ).astype(np.int32)
 
@@ -129,7 +170,7 @@ def congestion(
     Args:
         positions: ``[T + 1, M, 2]`` cells ``(x, y)``.
         moves: ``uint8 [T, M]`` move codes.
-        tasks: ``int32 [K, 9]`` (:func:`episode_arrays`' rows).
+        tasks: ``int32 [K, 10]`` (:func:`episode_arrays`' rows).
         shape: The grid's ``(H, W)``.
         bins: Time bins ``B``.
 
@@ -166,7 +207,8 @@ def open_tasks(
     last timestep only; a robot still on a task would look idle. The simulator's
     records hold every assignment: a robot with more assignments than scheduled tasks
     holds its last one. Its pickup is the first timestep from the assignment at which
-    the robot stands on the origin (``T + 1`` if it never does); its delivery ``T + 1``.
+    the robot stands on the origin (``T + 1`` if it never does); its delivery ``T + 1``;
+    its id its index in the records (the task stream).
 
     Args:
         schedule: The executed episode.
@@ -176,7 +218,7 @@ def open_tasks(
         task_assigned: ``float [N]`` assignment times (NaN if never assigned).
 
     Returns:
-        ``int32 [J, 9]`` rows as :func:`episode_arrays` orders them; ``J <= M``.
+        ``int32 [J, 10]`` rows as :func:`episode_arrays` orders them; ``J <= M``.
     """
     robots, end = schedule.num_robots, schedule.horizon + 1
     given = np.flatnonzero(task_robot >= 0)
@@ -193,9 +235,9 @@ def open_tasks(
     there = (schedule.positions[:, robot] == tasks[None, k, :2]).all(axis=-1) & (steps >= at)
     pickup = np.where(there.any(axis=0), there.argmax(axis=0), end)
     return (
-        np.column_stack([tasks[k], robot, task_arrival[k], at, pickup, np.full(len(k), end)])
+        np.column_stack([tasks[k], robot, task_arrival[k], at, pickup, np.full(len(k), end), k])
         .astype(np.int32)
-        .reshape(-1, 9)
+        .reshape(-1, TASK_COLUMNS)
     )
 
 
@@ -220,6 +262,14 @@ def episode_arrays(
     if unfinished is not None and len(unfinished):
         tasks = np.concatenate([tasks, unfinished.astype(np.int32)])
         tasks = tasks[np.argsort(tasks[:, 6], kind="stable")]
+    if schedule.task_ids is None:
+        tasks[:, 9] = np.arange(len(tasks))
+    headings = None if schedule.headings is None else np.asarray(schedule.headings)
+    if headings is not None and headings.shape != positions.shape[:2]:
+        raise ConfigError(
+            f"the schedule's headings are {list(headings.shape)}, not one per robot and "
+            f"timestep {list(positions.shape[:2])}"
+        )
     bins = max(1, min(bins, steps))
     counts, bin_size = congestion(positions, moves, tasks, layout.obstacles.shape, bins)
     dtype = np.uint16 if bin_size <= np.iinfo(np.uint16).max else np.uint32
@@ -232,6 +282,8 @@ def episode_arrays(
         congestion=counts.astype(dtype),
         bin_size=bin_size,
         delivered=delivered.astype(np.int32),
+        headings=headings[0].astype(np.uint8) if headings is not None else None,
+        turns=turn_codes(headings) if headings is not None else None,
     )
 
 
@@ -255,4 +307,9 @@ def pack(arrays: EpisodeArrays, name: str, summary: dict[str, Any]) -> dict[str,
         "tasks": encode(arrays.tasks),
         "congestion": encode(arrays.congestion),
         "delivered": encode(arrays.delivered),
+        **(
+            {"headings": encode(arrays.headings), "turns": encode(arrays.turns.T)}
+            if arrays.headings is not None and arrays.turns is not None
+            else {}
+        ),
     }

@@ -48,7 +48,8 @@ class SavedEpisode:
     Attributes:
         schedule: The episode as the viewer draws it (cells ``(x, y)``; a task's robot
             and assignment from ``actualSchedule``, its pickup and delivery from its
-            first and last errand's events, ``T + 1`` when not reached).
+            first and last errand's events, ``T + 1`` when not reached; its
+            ``task_ids`` the file's task ids).
         tasks_finished: Tasks whose last errand was reached.
     """
 
@@ -291,6 +292,7 @@ def _saved(
             dtype=np.int64,
         ),
         headings=_headings(fields),
+        task_ids=np.array(ids, dtype=np.int64),
     )
     finished = sum(1 for k, (_, e) in fields.tasks.items() if len(e) in reached.get(k, {}))
     return SavedEpisode(schedule, finished)

@@ -39,9 +39,9 @@ __all__ = ["ViewEpisode", "file_size", "fill", "page", "write_view"]
 MAX_EPISODES = 2
 """Episodes a page shows side by side."""
 
-SCRIPTS = ("episode.js", "draw.js", "controls.js")
+SCRIPTS = ("episode.js", "draw.js", "heat.js", "controls.js")
 """The page's code (``rtaw_marl/viz/viewer/``), inlined in this order: the episodes'
-data, the drawing, the controls."""
+data, the drawing of maps and robots, the congestion and charts, the controls."""
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,7 @@ class ViewEpisode:
         schedule: The executed episode.
         summary: Numbers shown with it (``{"TTD": 1234.0}``).
         unfinished: Tasks robots still hold at the end that the schedule leaves out
-            (:func:`rtaw_marl.viz.episode_data.open_tasks`), ``int32 [J, 9]``.
+            (:func:`rtaw_marl.viz.episode_data.open_tasks`), ``int32 [J, 10]``.
     """
 
     name: str

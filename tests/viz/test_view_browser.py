@@ -124,16 +124,17 @@ def test_click_on_a_robot_shows_its_task(page: Any, episodes: Any) -> None:
     _click_cell(page, 0, int(x), int(y))
     state = _state(page)
     assert state["selected"] == robot
-    order = np.argsort(schedule.task_assigned, kind="stable")
-    k = next(
-        i
-        for i, j in enumerate(order)
+    j = next(
+        j
+        for j in range(len(schedule.tasks))
         if schedule.task_robot[j] == robot and schedule.task_assigned[j] <= t
         and t < schedule.task_delivered[j]
     )  # fmt: skip
-    ox, oy, dx, dy = schedule.tasks[order[k]]
+    ox, oy, dx, dy = schedule.tasks[j]
+    assert schedule.task_ids is not None
     assert f"robot {robot}" in state["info"]
-    assert f"task {k}: ({ox}, {oy}) -> ({dx}, {dy})" in state["info"]
+    # The task by its stream id (the simulator's), not by its rank of assignment.
+    assert f"task {schedule.task_ids[j]}: ({ox}, {oy}) -> ({dx}, {dy})" in state["info"]
     # A click on a cell with no robot clears the selection.
     free = np.argwhere(~_occupied(schedule, t))[0]
     _click_cell(page, 0, int(free[1]), int(free[0]))
@@ -148,24 +149,45 @@ def _occupied(schedule: Schedule, t: int) -> np.ndarray:
 
 
 def test_search_finds_and_follows(page: Any, episodes: Any) -> None:
+    """``t<id>`` is the task of that stream id in both panels: each panel selects the
+    robot that serves it in its own episode, centred there."""
     _, schedules = episodes
-    schedule = schedules["mpdm"]
-    order = np.argsort(schedule.task_assigned, kind="stable")
-    task = 7
+    rows = {}
+    for name, schedule in schedules.items():
+        assert schedule.task_ids is not None
+        rows[name] = {int(i): j for j, i in enumerate(schedule.task_ids)}
+    first, second = (schedules[n] for n in POLICIES)
+    # A task both episodes assigned, to different robots (ids differ from ranks).
+    task = next(
+        i for i in sorted(rows["mpdm"])
+        if i in rows["lookahead"]
+        and first.task_robot[rows["mpdm"][i]] != second.task_robot[rows["lookahead"][i]]
+    )  # fmt: skip
     box = page.find_element("id", "search")
     box.clear()
-    box.send_keys("t7\n")
+    box.send_keys(f"t{task}\n")
     state = _state(page)
-    assert state["selected"] == schedule.task_robot[order[task]]
+    j = rows["mpdm"][task]
+    assert state["task"] == task
+    assert state["selectedRobots"] == [
+        first.task_robot[j],
+        second.task_robot[rows["lookahead"][task]],
+    ]
     assert state["follow"]
-    assert schedule.task_assigned[order[task]] <= state["t"] < schedule.task_delivered[order[task]]
-    # Followed: the robot is drawn at the centre of the first panel.
-    x, y = schedule.positions[state["t"], state["selected"]]
-    cx, _ = page.execute_script(f"return window.rtawView.cellToClient(0, {x}, {y})")
-    left = page.execute_script(
-        "return document.querySelector('.panel canvas').getBoundingClientRect().toJSON()"
+    assert first.task_assigned[j] <= state["t"] < first.task_delivered[j]
+    assert f"task {task}: " in state["info"]
+    # Followed: each panel's robot is drawn at the centre of its panel.
+    rects = page.execute_script(
+        "return [...document.querySelectorAll('.panel canvas')]"
+        ".map(c => c.getBoundingClientRect().toJSON())"
     )
-    assert abs(cx - (left["left"] + left["width"] / 2)) < state["scale"]
+    for panel, name in enumerate(POLICIES):
+        robot = state["selectedRobots"][panel]
+        x, y = schedules[name].positions[min(state["t"], schedules[name].horizon), robot]
+        cx, cy = page.execute_script(f"return window.rtawView.cellToClient({panel}, {x}, {y})")
+        rect = rects[panel]
+        assert abs(cx - (rect["left"] + rect["width"] / 2)) < state["scale"]
+        assert abs(cy - (rect["top"] + rect["height"] / 2)) < state["scale"]
     box.clear()
     box.send_keys("robot 99\n")
     assert _state(page)["selected"] == -1

@@ -196,7 +196,7 @@ def test_open_tasks_are_the_last_assignments_the_schedule_leaves_out(
     arrival = np.array([0.0, 0.0, 2.0, 3.0, 4.0])
     assigned = np.array([0.0, 1.0, 5.0, 4.0, np.nan])
     rows = open_tasks(schedule, tasks, robot, arrival, assigned)
-    assert rows.tolist() == [[4, 0, 0, 0, 0, 2, 5, 5, 6], [0, 3, 1, 1, 1, 3, 4, 6, 6]]
+    assert rows.tolist() == [[4, 0, 0, 0, 0, 2, 5, 5, 6, 2], [0, 3, 1, 1, 1, 3, 4, 6, 6, 3]]
     arrays = episode_arrays(layout, schedule, unfinished=rows)
     assert arrays.tasks[:, 6].tolist() == [0, 1, 4, 5]  # numbered by assignment time
     assert arrays.delivered.sum() == 2  # the open tasks are not delivered
@@ -219,7 +219,7 @@ def test_a_horizon_episode_shows_every_assigned_task(tmp_path: Path) -> None:
     rows = open_tasks(schedule, sim.tasks, sim.task_robot, sim.task_arrival, sim.task_assigned)
     assert len(rows) >= 1
     assert len(schedule.tasks) + len(rows) == int((sim.task_robot >= 0).sum())
-    for ox, oy, _, _, robot, _, at, pickup, delivered in rows.tolist():
+    for ox, oy, _, _, robot, _, at, pickup, delivered, _ in rows.tolist():
         assert delivered == schedule.horizon + 1
         assert at <= pickup
         if pickup <= schedule.horizon:

@@ -5,8 +5,11 @@ of ``navigator=pibt``, ``sipp`` or ``cbs``) as the JSON ``lifelong`` writes, so 
 LoRR's viewer PlanViz replays it: ``actualPaths``, ``events``, ``tasks``, ``start``,
 ``actualSchedule``. Robots here move in four directions without turning, so the action
 model is PlanViz's ``MAPF`` (no headings), with its letters: ``R`` one column right,
-``L`` left, ``U`` one row down (row + 1), ``D`` one row up, ``W`` wait. Tasks are numbered
-in the schedule's order; an event is ``[timestep, robot, task, errands reached]``.
+``L`` left, ``U`` one row down (row + 1), ``D`` one row up, ``W`` wait. A task's id is its
+index in the episode's task stream (``Schedule.task_ids``: for a LoRR problem, the id
+LoRR's ``lifelong`` gives the same task), so ids of tasks never assigned are missing; a
+schedule without stream ids numbers its tasks by assignment order. An event is
+``[timestep, robot, task, errands reached]``.
 
 :func:`replay` reads such a file, ``lifelong``'s own (``MAPF_T``: ``F`` forward, ``R``
 clockwise, ``C`` counter-clockwise, ``W``/``T`` wait; headings ``E, S, W, N`` move
@@ -74,7 +77,8 @@ def episode_output(schedule: Schedule, horizon: int | None = None) -> dict[str, 
     paths = [",".join(letters[:, r]) for r in range(pos.shape[1])]
     tasks, events, plan = [], [], [[] for _ in range(pos.shape[1])]
     order = np.argsort(schedule.task_assigned, kind="stable")
-    for tid, k in enumerate(order.tolist()):
+    ids = np.arange(len(order)) if schedule.task_ids is None else schedule.task_ids[order]
+    for k, tid in zip(order.tolist(), ids.tolist(), strict=True):
         ox, oy, dx, dy = (int(v) for v in schedule.tasks[k])
         robot = int(schedule.task_robot[k])
         tasks.append([tid, int(schedule.task_arrival[k]), [oy, ox, dy, dx]])

@@ -35,6 +35,10 @@ class Schedule:
         headings: ``int64 [T + 1, M]`` each robot's heading at each time (LoRR's 0 east,
             1 south, 2 west, 3 north) when robots turn (``navigator.turns``); ``None``
             when they move in any direction without turning.
+        task_ids: ``int64 [K]`` each task's index in the episode's task stream (the
+            simulator's records, :attr:`rtaw_marl.sim.core.WarehouseSim.tasks`; for a
+            LoRR problem, LoRR's task id), the same task under the same id in every
+            episode of one seed; ``None`` when unknown (a schedule built by hand).
     """
 
     positions: np.ndarray
@@ -45,6 +49,7 @@ class Schedule:
     task_pickup: np.ndarray
     task_delivered: np.ndarray
     headings: np.ndarray | None = None
+    task_ids: np.ndarray | None = None
 
     @classmethod
     def of_tasks(
@@ -54,7 +59,7 @@ class Schedule:
         """A schedule of the tasks ``served int [K]`` of an episode's records (an
         :class:`~rtaw_marl.sim.execution.EpisodeRecords`, which imports this module), with
         the executor's ``pickup`` and ``delivered`` times of every task (``int [T]``) and
-        the robots' ``headings`` if they turn."""
+        the robots' ``headings`` if they turn; ``served`` are the tasks' stream ids."""
         return cls(
             positions=positions,
             tasks=records.tasks[served].copy(),
@@ -64,6 +69,7 @@ class Schedule:
             task_pickup=np.asarray(pickup)[served].astype(np.int64),
             task_delivered=np.asarray(delivered)[served].astype(np.int64),
             headings=headings,
+            task_ids=np.asarray(served, dtype=np.int64).copy(),
         )
 
     @property

@@ -1,8 +1,16 @@
-// rtaw-view's page, 3/3: the clock, the controls, search, loading, the test API.
+// rtaw-view's page, 4/4: the clock, the controls, search, loading, the test API.
 function setTime(t) {
   const T = view.T;
   view.time = Math.max(0, Math.min(T, t));
   if (view.time >= T) view.playing = false;
+}
+
+// The throughput chart's window: about a fiftieth of the episode, at least one timestep.
+function defaultWindow(T) { return Math.max(1, Math.round(T / 50)); }
+
+function setWindow(w) {
+  view.tpWindow = Math.max(1, Math.min(Math.max(1, view.T), Math.round(Number(w)) || 1));
+  el("tp-window").value = String(view.tpWindow);
 }
 
 function tick(now) {
@@ -17,18 +25,10 @@ function render() {
   const start = performance.now();
   const t = Math.floor(view.time), frac = view.playing ? view.time - t : 0;
   for (const p of view.panels) p.ep.seek(Math.min(t, p.ep.T));
-  for (const p of view.panels) {
-    const bins = p.ep.congestion.length / (view.W * view.H);
-    const bin = Math.min(Math.floor(t / p.ep.binSize), bins - 1);
-    if (bin !== p.heatBin) { p.heatBin = bin; updateHeat(p, bin); }
-  }
-  const b = view.episodes[0].binSize, hb = view.panels[0].heatBin;
+  for (const p of view.panels) updateMini(p, binOf(p.ep, Math.min(t, p.ep.T)));
+  const b = view.episodes[0].binSize, hb = view.panels[0].miniBin;
   el("heat-range").textContent = `${hb * b}-${(hb + 1) * b - 1}`;
-  if (view.follow && view.selected >= 0) {
-    const p = view.panels[0], [x, y] = drawnXY(p.ep, view.selected, frac), r = p.canvas.getBoundingClientRect();
-    view.offX = r.width / 2 - (x + 0.5) * view.scale;
-    view.offY = r.height / 2 - (y + 0.5) * view.scale;
-  }
+  placeCameras(frac);
   for (const p of view.panels) drawPanel(p, frac);
   el("timeline").value = String(t);
   el("clock").textContent = `t = ${t} / ${view.T}` + (view.playing ? " (playing)" : "");
@@ -39,9 +39,23 @@ function render() {
   view.drawMs += performance.now() - start;
 }
 
+// The shared camera, or, following, each panel centred on its selected robot (the
+// shared camera then follows the first panel that has one).
+function placeCameras(frac) {
+  let lead = true;
+  for (const p of view.panels) {
+    p.offX = view.offX; p.offY = view.offY;
+    if (!view.follow || p.sel < 0) continue;
+    const [x, y] = drawnXY(p.ep, p.sel, frac), r = p.canvas.getBoundingClientRect();
+    p.offX = r.width / 2 - (x + 0.5) * view.scale;
+    p.offY = r.height / 2 - (y + 0.5) * view.scale;
+    if (lead) { view.offX = p.offX; view.offY = p.offY; lead = false; }
+  }
+}
+
 function pick(panel, clientX, clientY) {
   const r = panel.canvas.getBoundingClientRect();
-  const cx = (clientX - r.left - view.offX) / view.scale, cy = (clientY - r.top - view.offY) / view.scale;
+  const cx = (clientX - r.left - panel.offX) / view.scale, cy = (clientY - r.top - panel.offY) / view.scale;
   const ep = panel.ep, frac = view.playing ? view.time - Math.floor(view.time) : 0;
   let best = -1, bestD = 0.75 * 0.75;
   for (let m = 0; m < ep.M; m++) {
@@ -49,15 +63,18 @@ function pick(panel, clientX, clientY) {
     const d = (x + 0.5 - cx) ** 2 + (y + 0.5 - cy) ** 2;
     if (d < bestD) { bestD = d; best = m; }
   }
-  select(best, panel.index);
+  select(best);
 }
 
-function select(m, panelIndex) {
-  view.selected = m;
-  view.selectedPanel = panelIndex || 0;
+// Robot m in every panel (the same robot of the same fleet), or none (-1).
+function select(m) {
+  for (const p of view.panels) p.sel = m;
+  view.task = -1;
   view.message = "";
   showInfo();
 }
+
+function unfollow() { view.follow = false; view.atFit = false; el("follow").checked = false; }
 
 function attachMouse(panel) {
   let drag = null;
@@ -67,9 +84,10 @@ function attachMouse(panel) {
     const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
     if (drag.moved || Math.abs(dx) + Math.abs(dy) > 4) {
       drag.moved = true;
-      view.offX += dx; view.offY += dy;
+      view.offX = panel.offX + dx; view.offY = panel.offY + dy;
+      for (const p of view.panels) { p.offX = view.offX; p.offY = view.offY; }
       drag.x = e.clientX; drag.y = e.clientY;
-      view.follow = false; el("follow").checked = false;
+      unfollow();
     }
   });
   window.addEventListener("mouseup", (e) => {
@@ -88,33 +106,42 @@ function zoomAt(px, py, factor) {
   view.offX = px - ((px - view.offX) * s) / view.scale;
   view.offY = py - ((py - view.offY) * s) / view.scale;
   view.scale = s;
+  view.atFit = false;
 }
 
-// "12" or "r12": robot 12; "t34": the robot serving task 34, at the task's assignment.
+function refuse(message) { select(-1); view.message = message; showInfo(); return false; }
+
+// "12" or "r12": robot 12; "t34": task 34 of the task stream (the same task in both
+// episodes): in each panel the robot serving it, at its assignment in the first episode
+// that has it if the clock is outside it there.
 function search(text) {
   const q = String(text).trim().toLowerCase().replace(/^(robot|task)\s*/, (w) => (w[0] === "t" ? "t" : "r"));
   const match = /^([rt]?)\s*(\d+)$/.exec(q);
-  const ep = view.episodes[0];
-  if (!match) { view.selected = -1; view.message = `not understood: "${text}" (try 12, r12 or t34)`; showInfo(); return false; }
-  const id = Number(match[2]);
+  if (!match) return refuse(`not understood: "${text}" (try 12, r12 or t34)`);
+  const id = Number(match[2]), M = view.episodes[0].M;
   if (match[1] === "t") {
-    if (id >= ep.K) { view.selected = -1; view.message = `no task ${id} in ${ep.name} (tasks 0-${ep.K - 1})`; showInfo(); return false; }
-    const a = ep.field(id, 6), b = ep.field(id, 8);
+    const rows = view.panels.map((p) => p.ep.row(id)), first = rows.findIndex((k) => k >= 0);
+    if (first < 0) return refuse(`no task ${id} was assigned in ${view.episodes.map((e) => e.name).join(" or ")}`);
+    const ep = view.panels[first].ep, a = ep.field(rows[first], 6), b = ep.field(rows[first], 8);
     if (view.time < a || view.time >= b) { view.playing = false; setTime(a); }
-    select(ep.field(id, 4), 0);
+    select(-1);
+    view.panels.forEach((p, i) => { p.sel = rows[i] >= 0 ? p.ep.field(rows[i], 4) : -1; });
+    view.task = id;
   } else {
-    if (id >= ep.M) { view.selected = -1; view.message = `no robot ${id} (robots 0-${ep.M - 1})`; showInfo(); return false; }
-    select(id, 0);
+    if (id >= M) return refuse(`no robot ${id} (robots 0-${M - 1})`);
+    select(id);
   }
   view.follow = true;
   el("follow").checked = true;
   if (view.scale < 8) { const r = view.panels[0].canvas.getBoundingClientRect(); zoomAt(r.width / 2, r.height / 2, 8 / view.scale); }
+  showInfo();
   return true;
 }
 
 function legend() {
   const items = STATE_NAMES.map((n, i) => [n, STATE_COLORS[i]]);
   items.push(["queued task (zoomed in)", "#ffffff"], ["obstacle", "rgb(58,63,75)"], ["pickup station", "rgb(204,236,204)"], ["delivery station", "rgb(252,222,190)"], ["congestion", "rgb(220,20,20)"]);
+  if (view.episodes.length > 1) items.push([`A − B: more congested in ${view.episodes[1].name}`, "rgb(20,90,220)"]);
   el("legend").innerHTML = items.map(([n, c]) => `<span class="item"><span class="swatch" style="background:${c}"></span>${n}</span>`).join("");
 }
 
@@ -127,8 +154,13 @@ function controls() {
   el("timeline").oninput = (e) => { view.playing = false; setTime(Number(e.target.value)); };
   el("go").onclick = () => search(el("search").value);
   el("search").onkeydown = (e) => { if (e.key === "Enter") search(el("search").value); e.stopPropagation(); };
-  el("follow").onchange = (e) => { view.follow = e.target.checked; };
-  el("heat").onchange = (e) => { view.heat = e.target.checked; };
+  el("follow").onchange = (e) => { view.follow = e.target.checked; view.atFit = false; };
+  el("overlay").onchange = (e) => { view.overlay = e.target.value; };
+  if (view.panels.length < 2) el("overlay").querySelector("option[value=diff]").remove();
+  else el("overlay").querySelector("option[value=diff]").textContent = `${view.episodes[0].name} − ${view.episodes[1].name}`;
+  el("tp-window").max = String(Math.max(1, view.T));
+  el("tp-window").value = String(view.tpWindow);
+  el("tp-window").onchange = (e) => { setWindow(Number(e.target.value)); };
   el("fit").onclick = fit;
   el("throughput").onclick = (e) => {
     const r = e.target.getBoundingClientRect();
@@ -141,8 +173,8 @@ function controls() {
     else if (e.key === "ArrowRight") el("fwd").onclick();
     else if (e.key === "+" || e.key === "=") zoomAt(200, 200, 1.25);
     else if (e.key === "-") zoomAt(200, 200, 0.8);
-    else if (e.key === "f") { view.follow = !view.follow; el("follow").checked = view.follow; }
-    else if (e.key === "Escape") select(-1, 0);
+    else if (e.key === "f") { view.follow = !view.follow; el("follow").checked = view.follow; view.atFit = false; }
+    else if (e.key === "Escape") select(-1);
   });
   window.addEventListener("resize", resize);
 }
@@ -156,10 +188,13 @@ async function main() {
   view.mapPixels = new Uint32Array(view.map.getContext("2d").getImageData(0, 0, view.W, view.H).data.buffer);
   for (const meta of data.episodes) {
     const arrays = {};
-    for (const key of ["start", "moves", "tasks", "congestion", "delivered"]) arrays[key] = await decode(meta[key]);
+    for (const key of ["start", "moves", "tasks", "congestion", "delivered", "headings", "turns"]) {
+      if (meta[key]) arrays[key] = await decode(meta[key]);
+    }
     view.episodes.push(new Episode(meta, arrays));
   }
   view.T = Math.max(...view.episodes.map((e) => e.T));
+  view.tpWindow = defaultWindow(view.T);
   el("summary").textContent = view.episodes
     .map((e) => `${e.name}: ` + Object.entries(e.summary).map(([k, v]) => `${k} ${v}`).join(", "))
     .join("\n");
@@ -177,22 +212,28 @@ async function main() {
 window.rtawView = {
   get ready() { return Boolean(view.ready); },
   state: () => ({ time: view.time, t: Math.floor(view.time), playing: view.playing, speed: view.speed,
-    selected: view.selected, follow: view.follow, scale: view.scale, offX: view.offX, offY: view.offY,
+    selected: view.panels[0].sel, selectedRobots: view.panels.map((p) => p.sel), task: view.task,
+    follow: view.follow, scale: view.scale, offX: view.offX, offY: view.offY, stacked: view.stacked,
+    overlay: view.overlay, heatBlock: view.panels.map((p) => p.heatBlock || 1), tpWindow: view.tpWindow,
     steps: view.T, robots: view.episodes.map((e) => e.M), info: el("info").textContent }),
+  setOverlay: (mode) => { view.overlay = mode; el("overlay").value = mode; render(); },
+  setWindow: (w) => { setWindow(w); render(); },
+  throughput: () => view.throughput.series.map((s) => Array.from(s)),
+  fit: () => { fit(); render(); },
   stats: () => ({ frames: view.frames, drawMs: view.drawMs }),
   play: () => { view.playing = true; },
   pause: () => { view.playing = false; },
   seek: (t) => { view.playing = false; setTime(t); render(); },
   setSpeed: (v) => { view.speed = v; },
   setCamera: (scale, offX, offY) => {
-    Object.assign(view, { scale, offX, offY, follow: false });
-    el("follow").checked = false;
+    Object.assign(view, { scale, offX, offY });
+    unfollow();
     render();
   },
-  search,
+  search: (text) => { const found = search(text); render(); return found; },
   cellToClient: (panel, x, y) => {
-    const r = view.panels[panel].canvas.getBoundingClientRect();
-    return [r.left + view.offX + (x + 0.5) * view.scale, r.top + view.offY + (y + 0.5) * view.scale];
+    const p = view.panels[panel], r = p.canvas.getBoundingClientRect();
+    return [r.left + p.offX + (x + 0.5) * view.scale, r.top + p.offY + (y + 0.5) * view.scale];
   },
   cells: () => view.cells,
   colors: { states: STATE_COLORS, cells: CELL_COLORS },

@@ -1,6 +1,8 @@
-// rtaw-view's page, 2/3: the view's state and the drawing (maps, robots, heat, charts).
+// rtaw-view's page, 2/4: the view's state, the panels' layout and the drawing of maps
+// and robots (the congestion and the charts are in heat.js).
 const STATE_NAMES = ["idle", "to pickup", "carrying"];
 const QUEUED_COLOR = "#5a5a5a";
+const HEADING_COLOR = "rgba(255,255,255,0.9)";
 const STATE_COLORS = ["#8c8c8c", "#1f6fd1", "#e8710a"];
 const CELL_COLORS = [[242, 242, 242], [58, 63, 75], [204, 236, 204], [252, 222, 190]];
 // Below this many pixels per cell, robots are drawn as pixels of a grid-sized image.
@@ -8,10 +10,12 @@ const PIXEL_MODE = 4;
 const rgba32 = (hex) => { const v = parseInt(hex.slice(1), 16); return (0xff << 24 | (v & 0xff) << 16 | (v & 0xff00) | (v >> 16)) >>> 0; };
 const STATE_PIXELS = Uint32Array.from(STATE_COLORS, rgba32);
 
+// One camera (scale, offX, offY) for all panels; following, each panel centres its own
+// selected robot (a task found by id has a different robot in each episode).
 const view = {
   episodes: [], panels: [], W: 0, H: 0, time: 0, playing: false, speed: 10,
-  scale: 1, offX: 0, offY: 0, selected: -1, selectedPanel: 0, follow: false, heat: false,
-  frames: 0, drawMs: 0, lastTick: 0, message: "",
+  scale: 1, offX: 0, offY: 0, task: -1, follow: false, overlay: "none", atFit: true,
+  stacked: false, frames: 0, drawMs: 0, lastTick: 0, message: "",
 };
 
 function el(id) { return document.getElementById(id); }
@@ -36,15 +40,24 @@ function makePanel(ep, index) {
   label.className = "label";
   div.append(canvas, label);
   el("panels").append(div);
-  const heat = document.createElement("canvas");
-  heat.width = view.W; heat.height = view.H;
   const mini = document.createElement("canvas");
-  mini.width = view.W; mini.height = view.H;
   mini.title = ep.name;
   el("heatmaps").append(mini);
-  const panel = { ep, index, div, canvas, label, heat, mini, heatBin: -1, ctx: canvas.getContext("2d") };
+  const panel = { ep, index, div, canvas, label, mini, sel: -1, offX: 0, offY: 0, heatKey: "", miniBin: -1,
+    heat: document.createElement("canvas"), ctx: canvas.getContext("2d") };
   attachMouse(panel);
   return panel;
+}
+
+// Panels side by side or stacked, whichever gives the map the larger cells.
+function layoutPanels() {
+  const box = el("panels"), n = view.panels.length;
+  box.classList.remove("stacked");
+  const r = box.getBoundingClientRect();
+  const side = Math.min(r.width / n / view.W, r.height / view.H);
+  const stack = Math.min(r.width / view.W, r.height / n / view.H);
+  view.stacked = n > 1 && stack > side;
+  box.classList.toggle("stacked", view.stacked);
 }
 
 function fit() {
@@ -53,16 +66,19 @@ function fit() {
   view.offX = (r.width - view.W * view.scale) / 2;
   view.offY = (r.height - view.H * view.scale) / 2;
   view.follow = false;
+  view.atFit = true;
   el("follow").checked = false;
 }
 
 function resize() {
+  layoutPanels();
   const dpr = window.devicePixelRatio || 1;
   for (const p of view.panels) {
     const r = p.canvas.getBoundingClientRect();
     p.canvas.width = Math.max(1, Math.round(r.width * dpr));
     p.canvas.height = Math.max(1, Math.round(r.height * dpr));
   }
+  if (view.atFit) fit();
 }
 
 // The robot's drawn position at fractional time: its cell at t moved by frac of its move.
@@ -71,37 +87,18 @@ function drawnXY(ep, m, frac) {
   return [ep.pos[2 * m] + DX[c] * frac, ep.pos[2 * m + 1] + DY[c] * frac];
 }
 
-function updateHeat(panel, bin) {
-  const ep = panel.ep, size = view.W * view.H, counts = ep.congestion.subarray(bin * size, (bin + 1) * size);
-  for (const canvas of [panel.heat, panel.mini]) {
-    const ctx = canvas.getContext("2d"), img = ctx.createImageData(view.W, view.H);
-    const overlay = canvas === panel.heat;
-    for (let i = 0; i < size; i++) {
-      const v = Math.min(1, counts[i] / Math.max(1, ep.binSize * 0.5));
-      const o = 4 * i;
-      if (overlay) { img.data[o] = 220; img.data[o + 1] = 20; img.data[o + 2] = 20; img.data[o + 3] = v > 0 ? 40 + 200 * v : 0; }
-      else {
-        const base = CELL_COLORS[view.cells[i]] || CELL_COLORS[0];
-        const shade = view.cells[i] === 1 ? base : base.map((b, j) => Math.round(b * (1 - v) + [220, 20, 20][j] * v));
-        img.data[o] = shade[0]; img.data[o + 1] = shade[1]; img.data[o + 2] = shade[2]; img.data[o + 3] = 255;
-      }
-    }
-    ctx.putImageData(img, 0, 0);
-  }
-}
-
 function drawPanel(panel, frac) {
   const ep = panel.ep, ctx = panel.ctx, dpr = window.devicePixelRatio || 1;
   const s = view.scale;
   ctx.setTransform(1, 0, 0, 1, 0, 0);
   ctx.fillStyle = "#ffffff";
   ctx.fillRect(0, 0, panel.canvas.width, panel.canvas.height);
-  ctx.setTransform(dpr * s, 0, 0, dpr * s, dpr * view.offX, dpr * view.offY);
+  ctx.setTransform(dpr * s, 0, 0, dpr * s, dpr * panel.offX, dpr * panel.offY);
   ctx.imageSmoothingEnabled = false;
   if (s < PIXEL_MODE) drawRobotPixels(panel, frac);
   else drawRobotRects(panel, frac);
-  if (view.heat) ctx.drawImage(panel.heat, 0, 0);
-  if (view.selected >= 0 && view.selected < ep.M) drawSelected(panel, frac);
+  if (view.overlay !== "none") drawOverlay(panel);
+  if (panel.sel >= 0 && panel.sel < ep.M) drawSelected(panel, frac);
   panel.label.textContent = `${ep.name}: ${ep.finishedBefore[ep.at + 1]} tasks delivered by t = ${ep.at}`;
 }
 
@@ -126,13 +123,19 @@ function drawRobotPixels(panel, frac) {
   panel.ctx.drawImage(panel.pixelCanvas, 0, 0);
 }
 
+// The cells in view: [x0, y0, x1, y1], a cell of margin.
+function inView(panel) {
+  const s = view.scale, dpr = window.devicePixelRatio || 1;
+  const x0 = -panel.offX / s - 1, y0 = -panel.offY / s - 1;
+  return [x0, y0, x0 + panel.canvas.width / dpr / s + 2, y0 + panel.canvas.height / dpr / s + 2];
+}
+
 // Zoomed in: the map, then robots in view as rectangles that glide between cells, one
-// path per state colour.
+// path per state colour, and their headings when they turn.
 function drawRobotRects(panel, frac) {
-  const ep = panel.ep, ctx = panel.ctx, s = view.scale, dpr = window.devicePixelRatio || 1;
+  const ep = panel.ep, ctx = panel.ctx;
   ctx.drawImage(view.map, 0, 0);
-  const x0 = -view.offX / s - 1, y0 = -view.offY / s - 1;
-  const x1 = x0 + panel.canvas.width / dpr / s + 2, y1 = y0 + panel.canvas.height / dpr / s + 2;
+  const [x0, y0, x1, y1] = inView(panel);
   drawQueued(panel, x0, y0, x1, y1);
   const pad = 0.12;
   for (let st = 0; st < 3; st++) {
@@ -146,6 +149,26 @@ function drawRobotRects(panel, frac) {
     ctx.fillStyle = STATE_COLORS[st];
     ctx.fill();
   }
+  if (ep.head) drawHeadings(panel, frac, x0, y0, x1, y1);
+}
+
+// A robot's heading (0 east, 1 south, 2 west, 3 north): a triangle inside its square,
+// pointing where a forward move takes it; turning, it rotates with the clock.
+function drawHeadings(panel, frac, x0, y0, x1, y1) {
+  const ep = panel.ep, ctx = panel.ctx;
+  ctx.beginPath();
+  for (let m = 0; m < ep.M; m++) {
+    const [x, y] = drawnXY(ep, m, frac);
+    if (x < x0 || x > x1 || y < y0 || y > y1) continue;
+    const turn = ep.turnAt(m, ep.at), a = (ep.head[m] + (turn === 1 ? frac : turn === 3 ? -frac : 0)) * Math.PI / 2;
+    const c = Math.cos(a), s = Math.sin(a), cx = x + 0.5, cy = y + 0.5;
+    ctx.moveTo(cx + 0.34 * c, cy + 0.34 * s);
+    ctx.lineTo(cx - 0.16 * c - 0.2 * s, cy - 0.16 * s + 0.2 * c);
+    ctx.lineTo(cx - 0.16 * c + 0.2 * s, cy - 0.16 * s - 0.2 * c);
+    ctx.closePath();
+  }
+  ctx.fillStyle = HEADING_COLOR;
+  ctx.fill();
 }
 
 // Tasks waiting in the queue at t (arrived, not yet assigned): hollow squares at their
@@ -153,12 +176,12 @@ function drawRobotRects(panel, frac) {
 function drawQueued(panel, x0, y0, x1, y1) {
   const ep = panel.ep, tk = ep.tasks, t = ep.at;
   let lo = 0, hi = ep.K;
-  while (lo < hi) { const mid = (lo + hi) >> 1; if (tk[9 * mid + 6] <= t) lo = mid + 1; else hi = mid; }
+  while (lo < hi) { const mid = (lo + hi) >> 1; if (tk[TC * mid + 6] <= t) lo = mid + 1; else hi = mid; }
   const ctx = panel.ctx;
   ctx.beginPath();
   for (let k = lo; k < ep.K; k++) {
-    if (tk[9 * k + 5] > t) continue;
-    const x = tk[9 * k], y = tk[9 * k + 1];
+    if (tk[TC * k + 5] > t) continue;
+    const x = tk[TC * k], y = tk[TC * k + 1];
     if (x < x0 || x > x1 || y < y0 || y > y1) continue;
     ctx.rect(x + 0.3, y + 0.3, 0.4, 0.4);
   }
@@ -167,10 +190,15 @@ function drawQueued(panel, x0, y0, x1, y1) {
   ctx.stroke();
 }
 
+// The task shown with a selected robot: the task found by id, else the robot's own.
+function shownTask(panel) {
+  return view.task >= 0 ? panel.ep.row(view.task) : panel.ep.task[panel.sel];
+}
+
 function drawSelected(panel, frac) {
-  const ep = panel.ep, ctx = panel.ctx, m = view.selected, s = view.scale;
+  const ep = panel.ep, ctx = panel.ctx, m = panel.sel, s = view.scale;
   const lw = Math.max(0.12, 2 / s);
-  const k = ep.task[m];
+  const k = shownTask(panel);
   if (k >= 0) {
     const a = ep.field(k, 6), b = ep.field(k, 8);
     const cells = ep.path(m, a, b);
@@ -197,54 +225,23 @@ function drawSelected(panel, frac) {
   ctx.stroke();
 }
 
-// Tasks delivered per bin of timesteps, per episode: computed once.
-function throughputSeries() {
-  const T = view.T, bin = Math.max(1, Math.ceil((T + 1) / 150));
-  const series = view.episodes.map((ep) => {
-    const out = new Float64Array(Math.ceil((T + 1) / bin));
-    for (let t = 0; t <= ep.T; t++) out[Math.floor(t / bin)] += ep.delivered[t];
-    return out;
-  });
-  el("tp-bin").textContent = String(bin);
-  return { bin, series, top: Math.max(1, ...series.map((s) => Math.max(...s))) };
-}
-
-function drawThroughput() {
-  const c = el("throughput"), ctx = c.getContext("2d"), T = view.T;
-  if (!view.throughput) view.throughput = throughputSeries();
-  const { bin, series, top } = view.throughput;
-  ctx.clearRect(0, 0, c.width, c.height);
-  ctx.font = "10px sans-serif";
-  const colors = ["#1f6fd1", "#d0021b"];
-  series.forEach((s, i) => {
-    ctx.beginPath();
-    s.forEach((v, j) => ctx[j ? "lineTo" : "moveTo"]((j / s.length) * c.width, c.height - 12 - (v / top) * (c.height - 24)));
-    ctx.strokeStyle = colors[i % 2];
-    ctx.stroke();
-    ctx.fillStyle = colors[i % 2];
-    ctx.fillText(view.episodes[i].name, 4 + 110 * i, 10);
-  });
-  ctx.fillStyle = "#444";
-  ctx.fillText(`max ${top} per ${bin}`, c.width - 80, 10);
-  const x = (view.time / (T + 1)) * c.width;
-  ctx.fillStyle = "rgba(0,0,0,0.6)";
-  ctx.fillRect(x, 0, 1, c.height);
+function taskLines(ep, k, m, t) {
+  const f = (i) => ep.field(k, i);
+  const lines = [`  task ${f(9)}: (${f(0)}, ${f(1)}) -> (${f(2)}, ${f(3)})` + (f(4) === m ? "" : ` (robot ${f(4)})`)];
+  lines.push(`  arrived ${f(5)}, assigned ${f(6)}, pickup ${f(7)}, delivered ${f(8)}`);
+  if (f(4) === m && t >= f(6)) lines.push(`  waits in this task so far: ${ep.waits(m, f(6), Math.min(t, f(8)))}`);
+  return lines;
 }
 
 function showInfo() {
-  const m = view.selected;
-  if (m < 0) { el("info").textContent = view.message || "Click a robot, or find one by id."; return; }
-  const lines = [`robot ${m}`];
-  for (const ep of view.episodes) {
-    const k = ep.task[m], t = ep.at;
-    const [x, y] = [ep.pos[2 * m], ep.pos[2 * m + 1]];
-    lines.push(`${ep.name}: (${x}, ${y}) ${STATE_NAMES[ep.state[m]]}`);
-    if (k >= 0) {
-      const f = (i) => ep.field(k, i);
-      lines.push(`  task ${k}: (${f(0)}, ${f(1)}) -> (${f(2)}, ${f(3)})`);
-      lines.push(`  arrived ${f(5)}, assigned ${f(6)}, pickup ${f(7)}, delivered ${f(8)}`);
-      lines.push(`  waits in this task so far: ${ep.waits(m, f(6), Math.min(t, f(8)))}`);
-    }
+  if (view.panels.every((p) => p.sel < 0)) { el("info").textContent = view.message || "Click a robot, or find one by id."; return; }
+  const lines = view.task >= 0 ? [`task ${view.task}`] : [`robot ${view.panels[0].sel}`];
+  for (const p of view.panels) {
+    const ep = p.ep, m = p.sel, t = ep.at;
+    if (m < 0) { lines.push(`${ep.name}: task ${view.task} not assigned in this episode`); continue; }
+    lines.push(`${ep.name}: robot ${m} (${ep.pos[2 * m]}, ${ep.pos[2 * m + 1]}) ${STATE_NAMES[ep.state[m]]}`);
+    const k = shownTask(p);
+    if (k >= 0) lines.push(...taskLines(ep, k, m, t));
     let done = 0;
     for (let j = ep.robotFirst[m]; j < ep.robotFirst[m + 1]; j++) if (ep.field(ep.byRobot[j], 8) <= t) done++;
     lines.push(`  tasks delivered: ${done}, waits so far: ${ep.waits(m, 0, t)}`);

@@ -1,6 +1,6 @@
-// rtaw-view's page, 1/3: the episodes' data (rtaw_marl.viz.episode_data). Positions are
-// rebuilt from move codes: a keyframe every KEY timesteps is computed on load, so any
-// timestep is at most KEY - 1 moves per robot from one.
+// rtaw-view's page, 1/4: the episodes' data (rtaw_marl.viz.episode_data). Positions (and
+// headings, when robots turn) are rebuilt from move codes: a keyframe every KEY timesteps
+// is computed on load, so any timestep is at most KEY - 1 moves per robot from one.
 "use strict";
 window.rtawErrors = [];
 window.addEventListener("error", (e) => window.rtawErrors.push(String(e.message)));
@@ -10,6 +10,8 @@ const KEY = 64;
 const DX = [0, 1, -1, 0, 0];
 const DY = [0, 0, 0, 1, -1];
 const IDLE = 0, TO_PICKUP = 1, CARRYING = 2;
+// A task row: ox, oy, dx, dy, robot, arrival, assigned, pickup, delivered, stream id.
+const TC = 10;
 const TYPES = { uint8: Uint8Array, uint16: Uint16Array, uint32: Uint32Array, int32: Int32Array };
 
 async function decode(a) {
@@ -20,8 +22,9 @@ async function decode(a) {
   return new TYPES[a.dtype](await new Response(stream).arrayBuffer());
 }
 
-// One episode: positions at any timestep, robot states, tasks by robot. Moves come
-// robot by robot: robot m's move from s to s + 1 is moves[m * T + s].
+// One episode: positions (and headings) at any timestep, robot states, tasks by robot and
+// by id. Moves come robot by robot: robot m's move from s to s + 1 is moves[m * T + s];
+// turns likewise (0 none, 1 clockwise, 3 counter-clockwise), when robots turn.
 class Episode {
   constructor(meta, arrays) {
     this.name = meta.name;
@@ -30,10 +33,12 @@ class Episode {
     this.T = meta.steps;
     this.binSize = meta.bin_size;
     Object.assign(this, arrays);
-    this.K = this.tasks.length / 9;
+    this.K = this.tasks.length / TC;
     this.buildKeyframes();
+    if (this.turns) this.buildHeadingKeys();
     this.indexTasks();
     this.pos = new Int16Array(2 * this.M);
+    this.head = this.turns ? new Uint8Array(this.M) : null;
     this.state = new Uint8Array(this.M);
     this.task = new Int32Array(this.M);
     this.at = -1;
@@ -54,17 +59,30 @@ class Episode {
       }
     }
   }
+  buildHeadingKeys() {
+    const M = this.M, T = this.T, head = this.headings.slice();
+    this.hkeys = [];
+    for (let t = 0; t <= T; t++) {
+      if (t % KEY === 0) this.hkeys.push(head.slice());
+      if (t === T) break;
+      for (let m = 0; m < M; m++) head[m] = (head[m] + this.turns[m * T + t]) & 3;
+    }
+  }
   indexTasks() {
     const M = this.M, K = this.K, tk = this.tasks;
     this.robotFirst = new Int32Array(M + 1);
-    for (let k = 0; k < K; k++) this.robotFirst[tk[9 * k + 4] + 1]++;
+    for (let k = 0; k < K; k++) this.robotFirst[tk[TC * k + 4] + 1]++;
     for (let m = 0; m < M; m++) this.robotFirst[m + 1] += this.robotFirst[m];
     const fill = this.robotFirst.slice(0, M);
     this.byRobot = new Int32Array(K);
-    // Tasks are numbered by assignment time, so each robot's list comes out in time order.
-    for (let k = 0; k < K; k++) this.byRobot[fill[tk[9 * k + 4]]++] = k;
+    // Rows are in assignment order, so each robot's list comes out in time order.
+    for (let k = 0; k < K; k++) this.byRobot[fill[tk[TC * k + 4]]++] = k;
+    this.rowOfId = new Map();
+    for (let k = 0; k < K; k++) this.rowOfId.set(tk[TC * k + 9], k);
   }
-  field(k, i) { return this.tasks[9 * k + i]; }
+  field(k, i) { return this.tasks[TC * k + i]; }
+  // The row of the task with stream id `id`, -1 if this episode never assigned it.
+  row(id) { const k = this.rowOfId.get(id); return k === undefined ? -1 : k; }
   // Bring positions, states and tasks to integer timestep t.
   seek(t) {
     const M = this.M;
@@ -74,6 +92,7 @@ class Episode {
     } else {
       const k = Math.floor(t / KEY);
       this.pos.set(this.keys[k]);
+      if (this.head) this.head.set(this.hkeys[k]);
       for (let s = k * KEY; s < t; s++) this.applyRow(s);
     }
     this.at = t;
@@ -82,8 +101,8 @@ class Episode {
       let st = IDLE, cur = -1;
       for (let j = this.robotFirst[m]; j < this.robotFirst[m + 1]; j++) {
         const k = this.byRobot[j];
-        if (tk[9 * k + 6] > t) break;
-        if (t < tk[9 * k + 8]) { cur = k; st = t < tk[9 * k + 7] ? TO_PICKUP : CARRYING; break; }
+        if (tk[TC * k + 6] > t) break;
+        if (t < tk[TC * k + 8]) { cur = k; st = t < tk[TC * k + 7] ? TO_PICKUP : CARRYING; break; }
       }
       this.state[m] = st;
       this.task[m] = cur;
@@ -95,6 +114,9 @@ class Episode {
       const c = mv[m * T + s];
       if (c) { pos[2 * m] += DX[c]; pos[2 * m + 1] += DY[c]; }
     }
+    if (!this.head) return;
+    const head = this.head, turns = this.turns;
+    for (let m = 0; m < this.M; m++) head[m] = (head[m] + turns[m * T + s]) & 3;
   }
   // Robot m's cells from timestep a to b (inclusive), from the current position.
   path(m, a, b) {
@@ -113,4 +135,5 @@ class Episode {
     return n;
   }
   moveAt(m, t) { return t < this.T ? this.moves[m * this.T + t] : 0; }
+  turnAt(m, t) { return t < this.T ? this.turns[m * this.T + t] : 0; }
 }
