@@ -5,20 +5,25 @@ Examples::
     rtaw-results multirun/eval/2026-12-04/12-00-00_123      # every job of one sweep
     rtaw-results multirun/eval/2026-12-04 runs/big/results.json --output combined/
     rtaw-results SWEEP --reference lookahead --compare-to rbts
+    rtaw-results SWEEP --metric makespan --x sim.num_robots
 
 Every ``results.json`` under the folders given (and every file named) is read; rows
 are grouped by setting, named by the overrides that differ between jobs (a sweep over
-``policy`` merges into one setting). The table (mean TTD with its 95% interval, the
-paired difference with MPDM or ``--reference``, as ``rtaw-eval`` prints them) goes to
-stdout and, with a CSV, a JSON and a PNG plot, into ``<output>/combined.*`` (default:
-the one folder given), held for the run (another ``rtaw-results`` into it is refused)
-and written as one set: all four are rendered first, then renamed in together, so
-Ctrl-C or SIGTERM (one ``interrupted:`` line saying whether they were written, exit
-130 or 143) never leaves a mix of new and old files. No results found, an unreadable or
-foreign file (each is checked in full first:
-:func:`~rtaw_marl.evaluation.results_file.read_results`), an output that would replace
-one of the inputs, or two jobs of one setting that disagree: one ``error:`` line, exit
-status 2, before anything is written.
+``policy`` merges into one setting). The table (the mean of ``--metric``, TTD by
+default, with its 95% interval, the paired difference with MPDM or ``--reference``, as
+``rtaw-eval`` prints them) goes to stdout and, with a CSV, a JSON, a PNG plot
+(:mod:`~rtaw_marl.evaluation.combine_plot`: lines over a numeric swept key, one panel
+per value of the others, the differences below) and the per-episode table of every
+metric, into ``<output>/combined.*`` and ``combined_episodes.csv`` (default: the one
+folder given), held for the run (another ``rtaw-results`` into it is refused) and
+written as one set: all five are rendered first, then renamed in together, so Ctrl-C or
+SIGTERM (one ``interrupted:`` line saying whether they were written, exit 130 or 143)
+never leaves a mix of new and old files. No results found, an unreadable or foreign
+file (each is checked in full first:
+:func:`~rtaw_marl.evaluation.results_file.read_results`), a metric the files do not all
+hold, an ``--x`` that is not swept, an output that would replace one of the inputs, or
+two jobs of one setting that disagree: one ``error:`` line, exit status 2, before
+anything is written.
 """
 
 from __future__ import annotations
@@ -33,8 +38,15 @@ from pathlib import Path
 
 from rtaw_marl.cli.plain import OneLineParser, exit_after
 from rtaw_marl.errors import ConfigError
-from rtaw_marl.evaluation.combine import combine, evaluated_policies, find_results, load_jobs
+from rtaw_marl.evaluation.combine import (
+    check_metric,
+    combine,
+    evaluated_policies,
+    find_results,
+    load_jobs,
+)
 from rtaw_marl.evaluation.combine_output import (
+    OUTPUT_NAMES,
     OUTPUT_STEM,
     CombinedFiles,
     combined_paths,
@@ -50,7 +62,7 @@ __all__ = ["main", "parser", "run"]
 REFERENCE = "mpdm"
 
 #: The combined files, for messages.
-OUTPUTS = f"{OUTPUT_STEM}.{{txt,csv,json,png}}"
+OUTPUTS = f"{OUTPUT_STEM}.{{txt,csv,json,png}} and {OUTPUT_NAMES['episodes']}"
 
 
 def parser() -> argparse.ArgumentParser:
@@ -59,12 +71,21 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("paths", nargs="+", type=Path, help="sweep folders or results.json files")
     p.add_argument(
         "--output", type=Path,
-        help="folder of combined.{txt,csv,json,png} (default: the one folder given)",
+        help="folder of combined.{txt,csv,json,png} and combined_episodes.csv (default: "
+        "the one folder given)",
     )  # fmt: skip
     p.add_argument(
         "--reference", help=f"the main baseline of the comparisons (default: {REFERENCE})"
     )
     p.add_argument("--compare-to", help="a second baseline, as rtaw-eval's compare_to")
+    p.add_argument(
+        "--metric", default="ttd",
+        help="the metric of the table and plot: any the results hold (ttd, makespan, "
+        "tasks_finished, wait_mean, ...; default: ttd)",
+    )  # fmt: skip
+    p.add_argument(
+        "--x", help="the swept key on the plot's x axis (default: the first numeric one)"
+    )
     return p
 
 
@@ -121,9 +142,10 @@ def run(argv: list[str] | None = None) -> int:
     were written (all of them) or not (none changed), and returns 130 or 143.
 
     Raises:
-        RtawError: No results found, a file that is not an ``rtaw-eval`` result, jobs
-            of one setting that disagree, an output that is one of the inputs, an
-            output folder in use, or an unknown baseline.
+        RtawError: No results found, a file that is not an ``rtaw-eval`` result, a
+            metric not held by every result, an ``--x`` that is not swept, jobs of one
+            setting that disagree, an output that is one of the inputs, an output
+            folder in use, or an unknown baseline.
     """
     args = parser().parse_args(argv)
     progress = _Progress()
@@ -142,6 +164,7 @@ def _combine(args: argparse.Namespace, progress: _Progress) -> int:
     _check_not_inputs(progress.folder, found, [p for p in args.paths if not p.is_dir()])
     # Every input is checked in full before the output folder is made or held.
     jobs = load_jobs(found)
+    check_metric(jobs, args.metric)
     with claim_folder(progress.folder, "--output") as folder:
         evaluated = evaluated_policies(jobs)
         if args.reference is not None and args.reference not in evaluated:
@@ -149,9 +172,9 @@ def _combine(args: argparse.Namespace, progress: _Progress) -> int:
                 f"--reference {args.reference} was evaluated in no job; evaluated: "
                 f"{', '.join(evaluated)}"
             )
-        combined = combine(jobs, args.reference or REFERENCE, args.compare_to)
+        combined = combine(jobs, args.reference or REFERENCE, args.compare_to, metric=args.metric)
         table = combined_table(combined)
-        progress.files = render_combined(folder, combined, table)
+        progress.files = render_combined(folder, combined, table, x=args.x)
         print(table)
         written = progress.files.write()
     print(f"combined {len(jobs)} results files: {', '.join(map(str, written.values()))}")

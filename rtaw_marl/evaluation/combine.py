@@ -8,7 +8,9 @@ job's ``.hydra/overrides.yaml``; without it, the config keys that differ). Jobs 
 setting (a sweep over ``policy``) are merged when they ran the same seeds. Every number
 is recomputed from the per-seed values exactly as ``rtaw-eval`` computes its own
 (:func:`~rtaw_marl.evaluation.stats.mean_ci`,
-:func:`~rtaw_marl.evaluation.stats.paired_difference`).
+:func:`~rtaw_marl.evaluation.stats.paired_difference`), on TTD or any other metric the
+files hold (:func:`check_metric`), signed by which way it is better
+(:mod:`~rtaw_marl.evaluation.metric_goals`).
 """
 
 from __future__ import annotations
@@ -18,27 +20,38 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
-from rtaw_marl.errors import ConfigError
+from rtaw_marl.errors import ConfigError, did_you_mean
+from rtaw_marl.evaluation.job_overrides import job_overrides
 from rtaw_marl.evaluation.journal import NOT_SETTING
+from rtaw_marl.evaluation.metric_goals import metric_difference
 from rtaw_marl.evaluation.results_file import read_results
-from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
-from rtaw_marl.utils.renamed import upgrade_command
+from rtaw_marl.evaluation.stats import PairedDiff
 
 __all__ = [
     "RESULTS_NAME",
     "Combined",
     "Job",
     "Row",
+    "check_metric",
     "combine",
     "evaluated_policies",
     "find_results",
     "load_jobs",
+    "metric_names",
 ]
 
 #: The file every ``rtaw-eval`` job writes in its folder.
 RESULTS_NAME = "results.json"
+
+#: The config keys that name a setting in a plot's title, when the same in every job
+#: (a group by its option's name: ``layout=shelves``); the jobs' other common overrides
+#: follow them.
+HEADLINE_KEYS = (
+    "layout.name", "navigator.name", "tasks.name", "sim.num_robots", "sim.num_tasks",
+    "sim.episode_mode", "sim.horizon",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -71,17 +84,22 @@ class Row:
         setting: The swept keys' values.
         policy: The policy's name.
         seeds: The seeds.
-        ttd: TTD per seed.
-        vs: Paired TTD comparisons with each baseline evaluated at this setting.
+        values: The compared metric (:attr:`Combined.metric`) per seed.
+        vs: Paired comparisons of that metric with each baseline evaluated at this
+            setting (positive: this policy is better, or has more of a metric with no
+            better side).
         source: The results file.
+        metrics: Every metric of the results file per seed (``None`` where it was not
+            finite), for the per-episode table.
     """
 
     setting: dict[str, str]
     policy: str
     seeds: list[int]
-    ttd: list[float]
+    values: list[float]
     vs: dict[str, PairedDiff] = field(default_factory=dict)
     source: str = ""
+    metrics: dict[str, list[float | None]] = field(default_factory=dict)
 
 
 @dataclass
@@ -93,12 +111,17 @@ class Combined:
         rows: Setting by setting, the policies in the order the jobs list them.
         baselines: The policies every row is compared with (evaluated somewhere).
         sources: The results files read.
+        metric: The metric of :attr:`Row.values` and the comparisons.
+        fixed: What every job shares, in short (:data:`HEADLINE_KEYS` and the common
+            overrides), as ``{key: value}`` to type on the command line.
     """
 
     swept: list[str]
     rows: list[Row]
     baselines: list[str]
     sources: list[str]
+    metric: str = "ttd"
+    fixed: dict[str, str] = field(default_factory=dict)
 
 
 def find_results(paths: Iterable[str | Path]) -> list[Path]:
@@ -144,12 +167,44 @@ def _load(path: Path) -> Job:
     results = read_results(path)  # the whole file checked before any of it is used
     setting = {k: v for k, v in results.config.items() if k not in NOT_SETTING}
     policies = {name: dict(metrics) for name, metrics in results.policies.items()}
-    return Job(path, dict(_flatten(setting)), _overrides(path), results.seeds, policies)
+    return Job(path, dict(_flatten(setting)), job_overrides(path), results.seeds, policies)
 
 
 def evaluated_policies(jobs: Sequence[Job]) -> list[str]:
     """Every policy some job evaluated, in the order they first appear."""
     return list(dict.fromkeys(name for job in jobs for name in job.policies))
+
+
+def metric_names(jobs: Sequence[Job]) -> list[str]:
+    """The metrics every policy of every job holds, in the order the first lists them."""
+    held = [set(m) for job in jobs for m in job.policies.values()]
+    first = next(iter(jobs[0].policies.values())) if jobs else {}
+    return [name for name in first if all(name in h for h in held)]
+
+
+def check_metric(jobs: Sequence[Job], metric: str) -> None:
+    """Check that every policy of every job has a number for ``metric`` on every seed.
+
+    Raises:
+        ConfigError: ``metric`` is not held by every policy of every job (the message
+            lists those that are), or one of its values is ``null`` (not finite).
+    """
+    valid = metric_names(jobs)
+    if metric not in valid:
+        some = [f"{job.path} ({p})" for job in jobs for p, m in job.policies.items() if metric in m]
+        held = f"held only by some results ({some[0]} ...), not all; " if some else ""
+        raise ConfigError(
+            f"--metric {metric}: {held or 'unknown metric; '}valid: {', '.join(valid)}"
+            f"{'' if some else did_you_mean(metric, valid)}"
+        )
+    for job in jobs:
+        for policy, metrics in job.policies.items():
+            if None in metrics[metric]:
+                seed = job.seeds[metrics[metric].index(None)]
+                raise ConfigError(
+                    f"--metric {metric}: {job.path}: policy {policy} has no finite "
+                    f"{metric} on seed {seed} (null); compare another metric"
+                )
 
 
 def _flatten(config: Mapping[str, Any], prefix: str = "") -> Iterable[tuple[str, str]]:
@@ -158,52 +213,6 @@ def _flatten(config: Mapping[str, Any], prefix: str = "") -> Iterable[tuple[str,
             yield from _flatten(value, f"{prefix}{key}.")
         else:
             yield f"{prefix}{key}", json.dumps(value, sort_keys=True)
-
-
-def _overrides(path: Path) -> dict[str, str] | None:
-    """The job's overrides (``.hydra/overrides.yaml``) by key, without the options
-    that are no setting; ``None`` when the file is not there. Overrides written before
-    the simulator's keys were renamed (``env.num_robots=10``) are read under today's
-    names (``sim.num_robots``), as the results file's config is.
-
-    Raises:
-        ConfigError: The file cannot be read, or is not what Hydra writes there (a list
-            of ``KEY=VALUE`` strings); the message names it.
-    """
-    file = path.parent / ".hydra" / "overrides.yaml"
-    if not file.is_file():
-        return None
-    out: dict[str, str] = {}
-    for item in upgrade_command(_override_items(file)):
-        key, _, value = item.partition("=")
-        key = key.lstrip("+~")
-        if key.split(".")[0].split("/")[0] not in (*NOT_SETTING, "hydra"):
-            out[key] = value
-    return out
-
-
-def _override_items(file: Path) -> list[str]:
-    """The strings of an overrides file, checked: Hydra writes a list of them."""
-    import yaml  # omegaconf's dependency: the cli extra
-
-    try:
-        items = yaml.safe_load(file.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise ConfigError(f"{file}: cannot be read ({_first_line(exc)})") from None
-    except RecursionError:  # PyYAML composes nested nodes recursively
-        raise ConfigError(f"{file}: nested too deeply to be a Hydra overrides list") from None
-    if items is None:  # an empty file: a job run without overrides
-        return []
-    if not isinstance(items, list) or not all(isinstance(item, str) for item in items):
-        raise ConfigError(
-            f"{file}: not a Hydra overrides list (a list of KEY=VALUE strings, as "
-            "Hydra writes for each job)"
-        )
-    return items
-
-
-def _first_line(exc: BaseException) -> str:
-    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
 
 
 def _swept(jobs: Sequence[Job], settings: Sequence[dict[str, str]]) -> list[str]:
@@ -239,6 +248,7 @@ def combine(
     reference: str = "mpdm",
     compare_to: str | None = None,
     confidence: float = 0.95,
+    metric: str = "ttd",
 ) -> Combined:
     """Group the jobs' rows by setting and compare every policy with the baselines.
 
@@ -249,11 +259,14 @@ def combine(
         compare_to: A second baseline, like ``rtaw-eval``'s ``compare_to``; it must be
             evaluated in some job.
         confidence: Confidence level of the intervals.
+        metric: The metric to compare (:func:`check_metric`).
 
     Raises:
-        ConfigError: Two jobs of one setting hold the same policy or other seeds, or a
-            baseline asked for was evaluated nowhere.
+        ConfigError: Two jobs of one setting hold the same policy or other seeds, a
+            baseline asked for was evaluated nowhere, or ``metric`` is not a number on
+            every seed of every policy.
     """
+    check_metric(jobs, metric)
     swept = _swept(jobs, [job.setting for job in jobs])
     groups: dict[str, list[Job]] = {}
     for job in jobs:
@@ -266,19 +279,23 @@ def combine(
     baselines = [b for b in dict.fromkeys([reference, compare_to]) if b in evaluated]
     rows: list[Row] = []
     for group in groups.values():
-        rows += _group_rows(group, swept, baselines, confidence)
-    return Combined(swept, rows, baselines, [str(job.path) for job in jobs])
+        rows += _group_rows(group, swept, baselines, confidence, metric)
+    sources = [str(job.path) for job in jobs]
+    return Combined(swept, rows, baselines, sources, metric, _fixed(jobs, swept))
 
 
 def _group_rows(
-    group: Sequence[Job], swept: Sequence[str], baselines: Sequence[str], confidence: float
+    group: Sequence[Job],
+    swept: Sequence[str],
+    baselines: Sequence[str],
+    confidence: float,
+    metric: str,
 ) -> list[Row]:
     """The rows of the jobs of one setting (merged), compared with the baselines."""
     first = group[0]
     setting = {key: _label(first, key) for key in swept}
     named = " ".join(f"{k}={v}" for k, v in setting.items()) or "the setting"
-    ttd: dict[str, list[float]] = {}
-    source: dict[str, str] = {}
+    rows: dict[str, Row] = {}
     for job in group:
         if job.seeds != first.seeds:
             raise ConfigError(
@@ -286,15 +303,42 @@ def _group_rows(
                 "paired comparisons need the same seeds"
             )
         for name, metrics in job.policies.items():
-            if name in ttd:
-                raise ConfigError(f"{named}: policy {name} is in {source[name]} and {job.path}")
-            ttd[name] = [float(v) for v in metrics["ttd"]]
-            source[name] = str(job.path)
-    rows = []
-    for name, values in ttd.items():
-        row = Row(dict(setting), name, list(first.seeds), values, source=source[name])
+            if name in rows:
+                raise ConfigError(
+                    f"{named}: policy {name} is in {rows[name].source} and {job.path}"
+                )
+            values = [float(v) for v in cast("list[float]", metrics[metric])]  # checked
+            rows[name] = Row(dict(setting), name, list(first.seeds), values, source=str(job.path),
+                             metrics={k: list(v) for k, v in metrics.items()})  # fmt: skip
+    for name, row in rows.items():
         for base in baselines:
-            if base in ttd and base != name:
-                row.vs[base] = paired_difference(ttd[base], values, confidence)
-        rows.append(row)
-    return rows
+            if base in rows and base != name:
+                row.vs[base] = metric_difference(metric, rows[base].values, row.values, confidence)
+    return list(rows.values())
+
+
+def _fixed(jobs: Sequence[Job], swept: Sequence[str]) -> dict[str, str]:
+    """What every job shares, short: the :data:`HEADLINE_KEYS` of one value in every job
+    (a group as ``layout=shelves``), then the overrides every job has alike, each by the
+    key to type; none under a swept key."""
+
+    def under_swept(key: str) -> bool:
+        return any(key == s or key.startswith(f"{s}.") or s.startswith(f"{key}.") for s in swept)
+
+    fixed: dict[str, str] = {}
+    for key in HEADLINE_KEYS:
+        values = {job.setting.get(key) for job in jobs}
+        value = values.pop() if len(values) == 1 else None
+        if value is not None and value != "null" and not under_swept(key):
+            loaded = json.loads(value)
+            fixed[key.removesuffix(".name")] = loaded if isinstance(loaded, str) else value
+    if all(job.overrides is not None for job in jobs):
+        common = [job.overrides or {} for job in jobs]
+        for key, value in common[0].items():
+            if (
+                key not in fixed
+                and not under_swept(key)
+                and all(o.get(key) == value for o in common)
+            ):
+                fixed[key] = value
+    return fixed

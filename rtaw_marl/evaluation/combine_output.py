@@ -1,11 +1,17 @@
 """The combined table of a sweep (:mod:`rtaw_marl.evaluation.combine`) as markdown, CSV,
-JSON and a PNG plot, written as one set.
+JSON, a PNG plot (:mod:`~rtaw_marl.evaluation.combine_plot`) and the per-episode table,
+written as one set.
 
-:func:`render_combined` renders the four files in memory; :meth:`CombinedFiles.write`
-writes each to a temporary file beside its target and then renames all four in together
+:func:`render_combined` renders the five files in memory; :meth:`CombinedFiles.write`
+writes each to a temporary file beside its target and then renames all five in together
 with SIGINT and SIGTERM deferred (``signals_held``), so a stop leaves either the
 previous files or the complete new set, never a mix (a crash or a full disk at any
 moment leaves no partial file).
+
+The table, CSV, JSON and plot are of one metric (:attr:`~rtaw_marl.evaluation.combine.
+Combined.metric`, TTD by default): its columns and keys are named after it (``ttd_mean``,
+``makespan_mean``). ``combined_episodes.csv`` holds every metric: one row per job,
+policy and seed, the swept keys as columns.
 """
 
 from __future__ import annotations
@@ -20,9 +26,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from rtaw_marl.evaluation.combine import Combined, Row
+from rtaw_marl.evaluation.combine import Combined
+from rtaw_marl.evaluation.combine_plot import plot_png
+from rtaw_marl.evaluation.metric_goals import metric_goal, metric_label
 from rtaw_marl.evaluation.report import (
     baseline_label,
     diff_cell,
@@ -32,49 +38,63 @@ from rtaw_marl.evaluation.report import (
     mean_ci_cell,
 )
 from rtaw_marl.evaluation.stats import mean_ci
+from rtaw_marl.evaluation.tidy import csv_text
 from rtaw_marl.utils.atomic import disk_full_guard
 from rtaw_marl.utils.signals import signals_held
 
 __all__ = [
+    "EPISODES",
+    "OUTPUT_NAMES",
     "OUTPUT_STEM",
     "OUTPUT_SUFFIXES",
     "CombinedFiles",
     "combined_paths",
     "combined_payload",
     "combined_table",
+    "episodes_csv",
     "render_combined",
     "write_combined",
 ]
 
-#: The combined files are ``<folder>/combined.{txt,csv,json,png}``.
+#: The combined files are ``<folder>/combined.{txt,csv,json,png}`` and
+#: ``<folder>/combined_episodes.csv``.
 OUTPUT_STEM = "combined"
-#: Their suffixes, in the order they are listed.
+#: The suffixes of the ``combined.*`` files, in the order they are listed.
 OUTPUT_SUFFIXES = ("txt", "csv", "json", "png")
+#: The key of the per-episode table among the files.
+EPISODES = "episodes"
+#: Every combined file's name by its key: the suffixes, and :data:`EPISODES`.
+OUTPUT_NAMES = {
+    **{suffix: f"{OUTPUT_STEM}.{suffix}" for suffix in OUTPUT_SUFFIXES},
+    EPISODES: f"{OUTPUT_STEM}_episodes.csv",
+}
 
 
 def combined_paths(folder: str | Path) -> dict[str, Path]:
-    """The combined files of ``folder`` by suffix: ``<folder>/combined.<suffix>``."""
-    return {suffix: Path(folder) / f"{OUTPUT_STEM}.{suffix}" for suffix in OUTPUT_SUFFIXES}
+    """The combined files of ``folder`` by key (:data:`OUTPUT_NAMES`)."""
+    return {key: Path(folder) / name for key, name in OUTPUT_NAMES.items()}
 
 
 def combined_table(combined: Combined, confidence: float = 0.95) -> str:
     """A markdown table, one row per policy and setting, and ``rtaw-eval``'s legend.
 
-    Columns: the swept keys, the policy, the number of seeds, mean TTD ± the
-    half-width of its t-interval, then the paired TTD difference with each baseline
-    (``+`` = below the baseline's TTD) as ``rtaw-eval`` prints it.
+    Columns: the swept keys, the policy, the number of seeds, the metric's mean ± the
+    half-width of its t-interval, then its paired difference with each baseline (``+``
+    = better than the baseline: below its TTD, above its tasks finished) as
+    ``rtaw-eval`` prints it.
     """
     level = f"{100 * confidence:g}% CI"
-    head = [*combined.swept, "policy", "seeds", f"TTD ± {level}"]
-    head += [f"TTD vs {baseline_label(base)}" for base in combined.baselines]
+    label = metric_label(combined.metric)
+    head = [*combined.swept, "policy", "seeds", f"{label} ± {level}"]
+    head += [f"{label} vs {baseline_label(base)}" for base in combined.baselines]
     rows = []
     for row in combined.rows:
         cells = [*row.setting.values(), row.policy, str(len(row.seeds))]
-        cells.append(mean_ci_cell(row.ttd, confidence))
+        cells.append(mean_ci_cell(row.values, confidence))
         cells += [diff_cell(row.vs[b]) if b in row.vs else "—" for b in combined.baselines]
         rows.append(cells)
     n = min(len(row.seeds) for row in combined.rows)
-    note = legend(n, confidence, combined.baselines, False, "")
+    note = legend(n, confidence, combined.baselines, False, "", combined.metric)
     return markdown_table(head, rows) + "\n" + note
 
 
@@ -84,25 +104,32 @@ def _interval(values: Sequence[float], confidence: float) -> tuple[float, list[f
 
 
 def combined_payload(combined: Combined, confidence: float = 0.95) -> dict[str, Any]:
-    """The combined rows as a JSON-ready dict: per row its setting, policy, seeds,
-    per-seed TTD, mean, interval and comparisons (``PairedDiff.as_dict()``)."""
+    """The combined rows as a JSON-ready dict: the metric (``metric``, and ``goal``:
+    ``"lower"``, ``"higher"`` or ``None``, which way is better), what every job shares
+    (``fixed``), and per row its setting, policy, seeds, the metric per seed (under its
+    name: ``ttd``), its mean (``ttd_mean``), interval (``ttd_ci``) and comparisons
+    (``PairedDiff.as_dict()``)."""
+    metric = combined.metric
     rows = []
     for row in combined.rows:
-        mean, ci = _interval(row.ttd, confidence)
+        mean, ci = _interval(row.values, confidence)
         rows.append(
             {
                 "setting": row.setting,
                 "policy": row.policy,
                 "seeds": row.seeds,
-                "ttd": row.ttd,
-                "ttd_mean": mean,
-                "ttd_ci": ci,
+                metric: row.values,
+                f"{metric}_mean": mean,
+                f"{metric}_ci": ci,
                 "vs": {base: diff.as_dict() for base, diff in row.vs.items()},
                 "source": row.source,
             }
         )
     return {
         "swept": combined.swept,
+        "metric": metric,
+        "goal": metric_goal(metric),
+        "fixed": combined.fixed,
         "baselines": combined.baselines,
         "confidence": confidence,
         "sources": combined.sources,
@@ -114,13 +141,15 @@ def _csv_text(combined: Combined, confidence: float) -> str:
     """One line per row; a comparison's columns are empty where it does not exist."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    head = [*combined.swept, "policy", "seeds", "ttd_mean", "ttd_ci_low", "ttd_ci_high"]
+    metric = combined.metric
+    head = [*combined.swept, "policy", "seeds", f"{metric}_mean"]
+    head += [f"{metric}_ci_low", f"{metric}_ci_high"]
     for base in combined.baselines:
         head += [f"vs_{base}_pct", f"vs_{base}_pct_low", f"vs_{base}_pct_high"]
         head.append(f"vs_{base}_significant")
     writer.writerow([*head, "source"])
     for row in combined.rows:
-        mean, ci = _interval(row.ttd, confidence)
+        mean, ci = _interval(row.values, confidence)
         line: list[Any] = [*row.setting.values(), row.policy, len(row.seeds), mean]
         line += ci or ["", ""]
         for base in combined.baselines:
@@ -133,54 +162,19 @@ def _csv_text(combined: Combined, confidence: float) -> str:
     return out.getvalue()
 
 
-def _setting_label(row: Row) -> str:
-    return "\n".join(f"{k}={v}" for k, v in row.setting.items()) or "all"
-
-
-def _plot(combined: Combined, confidence: float) -> bytes:
-    """Grouped bars: mean TTD per setting and policy with its interval; beside it, the
-    paired difference with the first baseline (when one was evaluated)."""
-    from matplotlib.figure import Figure  # the cli extra; no pyplot state
-
-    settings = list(dict.fromkeys(_setting_label(row) for row in combined.rows))
-    policies = list(dict.fromkeys(row.policy for row in combined.rows))
-    base = combined.baselines[0] if combined.baselines else None
-    panels = 2 if base is not None else 1
-    width = max(6.0, 1.2 * len(settings) * panels + 2)
-    fig = Figure(figsize=(width, 4.5), layout="constrained")
-    axes = fig.subplots(1, panels, squeeze=False)[0]
-    x = np.arange(len(settings))
-    step = 0.8 / len(policies)
-    for i, policy in enumerate(policies):
-        mine = {_setting_label(r): r for r in combined.rows if r.policy == policy}
-        at = [j for j, s in enumerate(settings) if s in mine]
-        rows = [mine[settings[j]] for j in at]
-        means = [mean_ci(r.ttd, confidence) for r in rows]
-        offset = x[at] - 0.4 + step * (i + 0.5)
-        # One colour per policy in both panels (the baseline has no bar in the second).
-        axes[0].bar(offset, [m for m, _ in means], step, yerr=[h or 0.0 for _, h in means],
-                    label=policy, capsize=2, color=f"C{i}")  # fmt: skip
-        if base is None:
-            continue
-        vs = [(j, r.vs[base]) for j, r in zip(offset, rows, strict=True) if base in r.vs]
-        vs = [(j, d) for j, d in vs if d.pct is not None]
-        if vs:
-            pct = np.array([d.pct for _, d in vs])
-            low = np.array([d.pct if d.pct_low is None else d.pct_low for _, d in vs])
-            high = np.array([d.pct if d.pct_high is None else d.pct_high for _, d in vs])
-            axes[1].bar([j for j, _ in vs], pct, step, yerr=[pct - low, high - pct],
-                        label=policy, capsize=2, color=f"C{i}")  # fmt: skip
-    level = f"{100 * confidence:g}%"
-    axes[0].set_ylabel(f"TTD (mean, {level} interval)")
-    if base is not None:
-        axes[1].axhline(0.0, color="black", linewidth=0.8)
-        axes[1].set_ylabel(f"TTD vs {baseline_label(base)} (%, + = better, paired)")
-    for ax in axes:
-        ax.set_xticks(x, settings, fontsize=8)
-    axes[0].legend(fontsize=8)
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=120)
-    return buffer.getvalue()
+def episodes_csv(combined: Combined) -> str:
+    """The per-episode table: one line per job, policy and seed (in the order of the
+    combined rows), the swept keys' values, ``policy``, ``seed``, every metric any
+    results file holds (in first-seen order; an empty cell where a file has none or it
+    was not finite) and the results file (``source``)."""
+    metrics = list(dict.fromkeys(name for row in combined.rows for name in row.metrics))
+    lines: list[dict[str, Any]] = []
+    for row in combined.rows:
+        for i, seed in enumerate(row.seeds):
+            line: dict[str, Any] = {**row.setting, "policy": row.policy, "seed": seed}
+            line.update({name: values[i] for name, values in row.metrics.items()})
+            lines.append({**line, "source": row.source})
+    return csv_text(lines, [*combined.swept, "policy", "seed", *metrics, "source"])
 
 
 @dataclass
@@ -188,8 +182,8 @@ class CombinedFiles:
     """The combined files, rendered and not yet written (:func:`render_combined`).
 
     Attributes:
-        paths: Each file's target by suffix (:func:`combined_paths`).
-        contents: Each file's bytes by suffix.
+        paths: Each file's target by key (:func:`combined_paths`).
+        contents: Each file's bytes by key.
         written: Whether :meth:`write` has renamed all of them in; set inside the block
             that defers SIGINT and SIGTERM, so a stop handled right after it sees it.
     """
@@ -201,7 +195,7 @@ class CombinedFiles:
     def write(self) -> dict[str, Path]:
         """Write every file to a temporary beside its target (fsynced), then rename all
         of them in with SIGINT and SIGTERM deferred (``signals_held``); returns
-        the targets by suffix.
+        the targets by key.
 
         Raises:
             DiskFullError: The disk filled up; no target was changed and no temporary
@@ -223,26 +217,41 @@ class CombinedFiles:
 
 
 def render_combined(
-    folder: str | Path, combined: Combined, table: str, confidence: float = 0.95
+    folder: str | Path,
+    combined: Combined,
+    table: str,
+    confidence: float = 0.95,
+    x: str | None = None,
 ) -> CombinedFiles:
-    """``combined.txt`` (``table``), ``.csv``, ``.json`` and ``.png`` for ``folder``,
-    rendered in memory; nothing is written yet (:meth:`CombinedFiles.write`)."""
+    """``combined.txt`` (``table``), ``.csv``, ``.json``, ``.png`` (``x``: the swept key
+    on its x axis, :func:`~rtaw_marl.evaluation.combine_plot.plot_spec`) and
+    ``combined_episodes.csv`` for ``folder``, rendered in memory; nothing is written
+    yet (:meth:`CombinedFiles.write`).
+
+    Raises:
+        ConfigError: ``x`` is not a swept key.
+    """
     payload = json_safe(combined_payload(combined, confidence))
     contents = {
         "txt": f"{table}\n".encode(),
         "csv": _csv_text(combined, confidence).encode(),
         "json": json.dumps(payload, indent=2, allow_nan=False).encode(),
-        "png": _plot(combined, confidence),
+        "png": plot_png(combined, confidence, x),
+        EPISODES: episodes_csv(combined).encode(),
     }
     return CombinedFiles(combined_paths(folder), contents)
 
 
 def write_combined(
-    folder: str | Path, combined: Combined, table: str, confidence: float = 0.95
+    folder: str | Path,
+    combined: Combined,
+    table: str,
+    confidence: float = 0.95,
+    x: str | None = None,
 ) -> dict[str, Path]:
-    """Render and write ``combined.txt`` (``table``), ``.csv``, ``.json`` and ``.png``
-    into ``folder`` as one set (:meth:`CombinedFiles.write`); returns them by suffix."""
-    return render_combined(folder, combined, table, confidence).write()
+    """Render and write the combined files (:func:`render_combined`) into ``folder`` as
+    one set (:meth:`CombinedFiles.write`); returns them by key."""
+    return render_combined(folder, combined, table, confidence, x).write()
 
 
 def _temporary(path: Path, data: bytes) -> Path:

@@ -11,12 +11,12 @@ from typing import Any
 
 import numpy as np
 
+from rtaw_marl.evaluation.metric_goals import difference_wording, metric_difference
 from rtaw_marl.evaluation.stats import (
     HindsightShare,
     PairedDiff,
     hindsight_share,
     mean_ci,
-    paired_difference,
 )
 from rtaw_marl.utils.atomic import atomic_write
 
@@ -81,7 +81,9 @@ def _compare(
         entry = _Comparison(has_share=with_share)
         for base in baselines:
             if base != name:
-                entry.vs[base] = paired_difference(results[base]["ttd"], metrics["ttd"], confidence)
+                entry.vs[base] = metric_difference(
+                    "ttd", results[base]["ttd"], metrics["ttd"], confidence
+                )
         if with_share:
             entry.share = hindsight_share(
                 results[reference]["ttd"], metrics["ttd"], results[hindsight]["ttd"], confidence
@@ -154,16 +156,24 @@ def _share_cell(share: HindsightShare | None) -> str:
 
 
 def legend(
-    n: int, confidence: float, baselines: list[str], with_share: bool, reference: str
+    n: int,
+    confidence: float,
+    baselines: list[str],
+    with_share: bool,
+    reference: str,
+    metric: str = "ttd",
 ) -> str:
-    """The one-line legend under a table of ``n`` seeds compared with ``baselines``."""
+    """The one-line legend under a table of ``n`` seeds compared with ``baselines`` on
+    ``metric`` (the sign's wording: :func:`~rtaw_marl.evaluation.metric_goals.
+    difference_wording`)."""
     level = f"{100 * confidence:g}%"
     if n < 2:
         parts = ["1 seed: no intervals (run 2+ seeds)"]
     else:
         parts = [f"± and [low, high]: {level} Student t-intervals over {n} seeds"]
     if baselines:
-        parts.append("vs X: TTD below X's, paired per seed, in % of X's mean (+ = better)")
+        side, sign = difference_wording(metric)
+        parts.append(f"vs X: {side} X's, paired per seed, in % of X's mean ({sign})")
         if n >= 2:
             parts.append("* = interval excludes 0")
     if with_share:

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from scipy import stats as sps
@@ -104,15 +104,19 @@ def mean_ci(values: Sequence[float], confidence: float = 0.95) -> tuple[float, f
 class PairedDiff:
     """Paired comparison of ``other`` against ``baseline`` over the same seeds.
 
-    Differences are ``baseline - other``: lower TTD is better, so a positive
-    difference means ``other`` is better.
+    Differences are ``baseline - other`` (``positive="lower"``, the default: lower TTD
+    is better, so a positive difference means ``other`` is better), or ``other -
+    baseline`` (``positive="higher"``: for a metric where more is better, or one with no
+    better side); which one a metric takes is
+    :func:`~rtaw_marl.evaluation.metric_goals.metric_difference`'s to say.
 
     Attributes:
         n: Number of paired seeds.
         confidence: Confidence level of the intervals.
         baseline_mean: Mean of the baseline's values.
         other_mean: Mean of the other policy's values.
-        mean: Mean per-seed difference ``baseline - other``.
+        mean: Mean per-seed difference (``baseline - other``, or ``other - baseline``
+            when made with ``positive="higher"``).
         sd: Sample standard deviation of the per-seed differences; None for n = 1.
         low: Lower end of the paired t-interval of ``mean``; None for n = 1.
         high: Upper end; None for n = 1.
@@ -157,7 +161,10 @@ class PairedDiff:
 
 
 def paired_difference(
-    baseline: Sequence[float], other: Sequence[float], confidence: float = 0.95
+    baseline: Sequence[float],
+    other: Sequence[float],
+    confidence: float = 0.95,
+    positive: Literal["lower", "higher"] = "lower",
 ) -> PairedDiff:
     """Paired Student t comparison of ``other`` against ``baseline`` (same seeds, same order).
 
@@ -165,11 +172,15 @@ def paired_difference(
         baseline: The baseline's value per seed (e.g. MPDM's TTD).
         other: The other policy's value per seed, in the same seed order.
         confidence: Confidence level of the interval.
+        positive: When the difference is positive: ``"lower"``, ``other`` below the
+            baseline (``baseline - other``, for TTD); ``"higher"``, ``other`` above it
+            (``other - baseline``, e.g. tasks finished).
 
     Returns:
         The mean difference ``baseline - other`` (positive: ``other`` is lower, i.e.
-        better for TTD), its interval, both also in percent of the baseline's mean, and
-        whether the interval excludes 0.
+        better for TTD), or ``other - baseline`` with ``positive="higher"``, its
+        interval, both also in percent of the baseline's mean, and whether the interval
+        excludes 0.
 
     Raises:
         ValueError: Different lengths, empty or non-finite values, or a confidence
@@ -180,7 +191,9 @@ def paired_difference(
     oth = _as_array(other, "other")
     if base.size != oth.size:
         raise ValueError(f"paired samples differ in length: {base.size} vs {oth.size}")
-    diff = base - oth
+    if positive not in ("lower", "higher"):
+        raise ValueError(f"positive must be 'lower' or 'higher', got {positive!r}")
+    diff = base - oth if positive == "lower" else oth - base
     n = int(diff.size)
     mean = float(diff.mean())
     half = _t_half_width(diff, confidence)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["episode_rows", "write_episodes_csv"]
+__all__ = ["csv_text", "episode_rows", "write_episodes_csv"]
 
 
 def episode_rows(
@@ -50,14 +50,19 @@ def write_episodes_csv(
     """Write :func:`episode_rows` as CSV, atomically. Columns: ``policy``, ``seed``, then
     every metric any policy has, in first-seen order (a metric a policy lacks is empty).
     """
-    rows = episode_rows(results, seeds)
-    columns: dict[str, None] = {"policy": None, "seed": None}
+    data = csv_text(episode_rows(results, seeds), ["policy", "seed"]).encode()
+    atomic_write(Path(path), lambda fh: fh.write(data))
+    return Path(path)
+
+
+def csv_text(rows: Sequence[Mapping[str, object]], first: Sequence[str] = ()) -> str:
+    """``rows`` as CSV text: the columns ``first``, then every other key of any row in
+    first-seen order; a key a row lacks, or a ``None`` value, is an empty cell."""
+    columns: dict[str, None] = dict.fromkeys(first)
     for row in rows:
         columns.update(dict.fromkeys(row))
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=list(columns), lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
-    data = text.getvalue().encode()
-    atomic_write(Path(path), lambda fh: fh.write(data))
-    return Path(path)
+    return text.getvalue()

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from rtaw_marl.evaluation import combine_output
-from rtaw_marl.evaluation.combine_output import OUTPUT_SUFFIXES
+from rtaw_marl.evaluation.combine_output import OUTPUT_NAMES
 from rtaw_marl.utils.runs import LOCK_NAME, claim_folder
 from rtaw_marl.utils.signals import Interrupted
 
@@ -26,6 +26,11 @@ pytestmark = pytest.mark.integration
 RTAW_RESULTS = Path(sys.executable).with_name("rtaw-results")
 
 TINY = ["sim.num_tasks=20", "policy=[mpdm,rbts]", "seeds=[0,1]", "progress=false"]
+
+#: Every file rtaw-results writes, sorted.
+ALL_FILES = sorted(OUTPUT_NAMES.values())
+#: How its stop lines name them.
+OUTPUTS = "combined.{txt,csv,json,png} and combined_episodes.csv"
 
 
 @pytest.fixture
@@ -113,9 +118,7 @@ def test_several_sweeps_with_an_output_folder(cli, tmp_path: Path, sweep: Path) 
                  "--output", str(out), "--reference", "rbts")  # fmt: skip
     assert result.code == 0, result.err
     assert "TTD vs RBTS" in result.out.splitlines()[0]
-    assert sorted(p.name for p in out.iterdir()) == [
-        "combined.csv", "combined.json", "combined.png", "combined.txt"
-    ]  # fmt: skip
+    assert sorted(p.name for p in out.iterdir()) == ALL_FILES
 
 
 def _job(folder: Path, payload: object, overrides: list[str] | None = None) -> Path:
@@ -318,10 +321,8 @@ def test_the_output_folder_is_held_while_the_files_are_written(cli, tmp_path: Pa
         assert not list(out.glob("combined.*"))
     result = cli("results", str(root), "--output", str(out))
     assert result.code == 0, result.err
-    # The lock is gone once the run ends; the four files are there.
-    assert sorted(p.name for p in out.iterdir()) == [
-        "combined.csv", "combined.json", "combined.png", "combined.txt"
-    ]  # fmt: skip
+    # The lock is gone once the run ends; the five files are there.
+    assert sorted(p.name for p in out.iterdir()) == ALL_FILES
 
 
 # ------------------------------------------------------------------ stops
@@ -329,9 +330,9 @@ def _old_set(out: Path) -> dict[str, bytes]:
     """A previous run's combined files (made-up contents)."""
     out.mkdir()
     old = {}
-    for suffix in OUTPUT_SUFFIXES:
-        path = out / f"combined.{suffix}"
-        path.write_bytes(f"old {suffix}".encode())
+    for name in OUTPUT_NAMES.values():
+        path = out / name
+        path.write_bytes(f"old {name}".encode())
         old[path.name] = path.read_bytes()
     return old
 
@@ -348,7 +349,7 @@ def _contents(out: Path) -> dict[str, bytes]:
 def test_a_stop_while_writing_leaves_the_previous_set(
     cli, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, stop: KeyboardInterrupt, status: int
 ) -> None:
-    """Stopped after two of the four new files are on disk (as temporaries): the old
+    """Stopped after two of the five new files are on disk (as temporaries): the old
     set is left whole, no temporary or lock is left, one line, 128 + signal."""
     root = tmp_path / "s"
     _job(root / "0", _payload(3, [0, 1], {"mpdm": [2.0, 3.0], "rbts": [1.0, 2.0]}))
@@ -365,17 +366,14 @@ def test_a_stop_while_writing_leaves_the_previous_set(
     monkeypatch.setattr(combine_output, "_temporary", stopping)
     result = cli("results", str(root), "--output", str(out))
     assert result.code == status
-    assert result.err == (
-        f"interrupted: nothing written; any combined.{{txt,csv,json,png}} in {out} are as "
-        "they were\n"
-    )
+    assert result.err == f"interrupted: nothing written; any {OUTPUTS} in {out} are as they were\n"
     assert _contents(out) == old  # no temporary, no lock, the old files as they were
 
 
 def test_a_signal_while_renaming_lets_the_whole_set_in(
     cli, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """A real SIGTERM that arrives while the files are renamed in waits until all four
+    """A real SIGTERM that arrives while the files are renamed in waits until all five
     are in: the line says so, exit 143."""
     root = tmp_path / "s"
     _job(root / "0", _payload(3, [0, 1], {"mpdm": [2.0, 3.0], "rbts": [1.0, 2.0]}))
@@ -392,7 +390,7 @@ def test_a_signal_while_renaming_lets_the_whole_set_in(
     monkeypatch.setattr(combine_output, "signals_held", signalled)
     result = cli("results", str(root), "--output", str(out))
     assert result.code == 143
-    assert result.err == f"interrupted: combined.{{txt,csv,json,png}} were all written to {out}\n"
+    assert result.err == f"interrupted: {OUTPUTS} were all written to {out}\n"
     new = _contents(out)
     assert sorted(new) == sorted(old)
     assert all(new[name] != old[name] for name in old)
@@ -425,8 +423,5 @@ def test_sigterm_during_a_long_combine_writes_nothing(tmp_path: Path) -> None:
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == 143, err
-    assert err == (
-        f"interrupted: nothing written; any combined.{{txt,csv,json,png}} in {out} are as "
-        "they were\n"
-    )
+    assert err == f"interrupted: nothing written; any {OUTPUTS} in {out} are as they were\n"
     assert list(out.iterdir()) == []
