@@ -72,6 +72,11 @@ def test_saved_lorr_output_is_shown(tmp_path: Path) -> None:
     start = json.loads(saved.read_text())["start"]
     assert pos[0].tolist() == [[c, r] for r, c, _ in start]
     assert ep["summary"]["tasks finished"] == json.loads(saved.read_text())["numTaskFinished"]
+    # The page's task ids are the file's (the played episode's stream ids).
+    entry = ep["tasks"]
+    rows = np.frombuffer(zlib.decompress(base64.b64decode(entry["data"])), dtype=entry["dtype"])
+    ids = rows.reshape(entry["shape"])[:, 9]
+    assert sorted(ids.tolist()) == sorted(t[0] for t in json.loads(saved.read_text())["tasks"])
 
 
 @pytest.mark.parametrize("app", ["view", "render"])

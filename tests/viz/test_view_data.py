@@ -8,6 +8,7 @@ import json
 import re
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from rtaw_marl.viz.episode_data import (
     layout_cells,
     move_codes,
     open_tasks,
+    turn_codes,
 )
 from rtaw_marl.viz.view import ViewEpisode, fill, page, write_view
 
@@ -219,8 +221,97 @@ def test_a_horizon_episode_shows_every_assigned_task(tmp_path: Path) -> None:
     rows = open_tasks(schedule, sim.tasks, sim.task_robot, sim.task_arrival, sim.task_assigned)
     assert len(rows) >= 1
     assert len(schedule.tasks) + len(rows) == int((sim.task_robot >= 0).sum())
+    # Their ids are the simulator's stream indices, each assigned task once.
+    assert schedule.task_ids is not None
+    ids = np.concatenate([schedule.task_ids, rows[:, 9]])
+    assert np.array_equal(np.sort(ids), np.flatnonzero(sim.task_robot >= 0))
     for ox, oy, _, _, robot, _, at, pickup, delivered, _ in rows.tolist():
         assert delivered == schedule.horizon + 1
         assert at <= pickup
         if pickup <= schedule.horizon:
             assert schedule.positions[pickup, robot].tolist() == [ox, oy]
+
+
+def _played(policies: tuple[str, ...], seed: int) -> tuple[Any, dict[str, Schedule]]:
+    """Layout A, SIPP, 12 robots: each policy's schedule on one seed."""
+    from rtaw_marl.evaluation.evaluate import run_episode
+    from rtaw_marl.policies import make_baseline
+    from rtaw_marl.sim.builder import SimSpec, build_sim
+
+    spec = SimSpec.of(
+        {"num_robots": 12, "num_tasks": 40, "queue_len": 6},
+        {"name": "A"},
+        {"name": "sipp"},
+        {"name": "designated"},
+    )
+    sim = build_sim(spec)
+    schedules = {}
+    for name in policies:
+        run_episode(sim, make_baseline(name), seed)
+        schedules[name] = sim.schedule()
+    return sim, schedules
+
+
+def test_stream_task_ids_agree_between_two_episodes_of_one_seed() -> None:
+    """Two policies on one seed: a task id names the same task (the same cells, the
+    stream's) in both pages' rows, though the policies assign tasks in different orders
+    (the rank of assignment, the old id, names different tasks)."""
+    sim, schedules = _played(("mpdm", "lookahead"), 3)
+    rows = {}
+    for name, schedule in schedules.items():
+        tasks = episode_arrays(sim.layout, schedule).tasks
+        rows[name] = {int(r[9]): r for r in tasks}
+        assert len(rows[name]) == len(tasks)  # ids unique
+        for i, r in rows[name].items():
+            assert r[:4].tolist() == sim.tasks[i].tolist()  # the stream's task i
+    a, b = rows.values()
+    common = sorted(set(a) & set(b))
+    assert len(common) >= 20
+    for i in common:
+        assert a[i][:4].tolist() == b[i][:4].tolist()
+    rank = [{int(r[9]): k for k, r in enumerate(episode_arrays(sim.layout, s).tasks)}
+            for s in schedules.values()]  # fmt: skip
+    assert any(rank[0][i] != rank[1][i] for i in common)
+
+
+def test_a_saved_file_keeps_the_stream_ids(tmp_path: Path) -> None:
+    """rtaw-render's LoRR output writes stream ids as its task ids; the reader keeps
+    them: the page of the file and the page of the played episode agree."""
+    sim, schedules = _played(("mpdm",), 3)
+    schedule = schedules["mpdm"]
+    assert schedule.task_ids is not None
+    back = read_schedule(write_episode(schedule, tmp_path / "e.json"), sim.layout)
+    played = episode_arrays(sim.layout, schedule).tasks
+    saved = episode_arrays(sim.layout, back).tasks
+    assert np.array_equal(np.sort(saved[:, 9]), np.sort(played[:, 9]))
+    by_id = {int(r[9]): r.tolist() for r in played}
+    for r in saved:
+        assert r.tolist() == by_id[int(r[9])]
+
+
+def test_headings_read_from_a_mapf_t_file() -> None:
+    """LoRR's turning model: robot 0 faces east and goes forward; robot 1 faces south,
+    turns clockwise (west) at t = 0, then goes forward. The page gets the start headings
+    and the quarter turns, robot by robot; a MAPF file gets neither."""
+    from rtaw_marl.viz.schedule_file import read_schedule_data
+    from tests.viz.saved_files import tiny_layout, valid
+
+    layout = tiny_layout()
+    saved = read_schedule_data(valid("MAPF_T"), layout).schedule
+    ep = _data(page(layout, [ViewEpisode("turns", saved)], "t"))["episodes"][0]
+    assert _array(ep["headings"]).tolist() == [0, 1]
+    assert _array(ep["turns"]).tolist() == [[0, 0, 0], [1, 0, 0]]
+    assert _array(ep["tasks"])[:, 9].tolist() == [0, 1]  # the file's task ids
+    plain = read_schedule_data(valid("MAPF"), layout).schedule
+    ep = _data(page(layout, [ViewEpisode("plain", plain)], "t"))["episodes"][0]
+    assert "headings" not in ep
+    assert "turns" not in ep
+
+
+def test_a_half_turn_is_refused() -> None:
+    headings = np.array([[0, 1], [1, 3], [1, 0]])
+    assert turn_codes(headings[:2, :1]).tolist() == [[1]]
+    with pytest.raises(ConfigError, match="robot 1 turns half round at timestep 0"):
+        turn_codes(headings)
+    with pytest.raises(ConfigError, match="robot 0 has heading 4 at timestep 1"):
+        turn_codes(np.array([[0], [4]]))
