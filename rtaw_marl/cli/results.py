@@ -79,13 +79,14 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--compare-to", help="a second baseline, as rtaw-eval's compare_to")
     p.add_argument(
-        "--metric", default="ttd",
+        "--metric", default="ttd", metavar="NAME",
         help="the metric of the table and plot: any the results hold (ttd, makespan, "
         "tasks_finished, wait_mean, ...; default: ttd)",
     )  # fmt: skip
     p.add_argument(
-        "--x", help="the swept key on the plot's x axis (default: the first numeric one)"
-    )
+        "--x", metavar="KEY",
+        help="the swept key on the plot's x axis (default: the first numeric one)",
+    )  # fmt: skip
     return p
 
 

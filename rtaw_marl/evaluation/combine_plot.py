@@ -44,6 +44,9 @@ __all__ = ["Panel", "PlotSpec", "Series", "plot_figure", "plot_png", "plot_spec"
 #: Where the panels' values come from: the metric's means, or a baseline's differences.
 VALUES = "values"
 
+#: The most numeric x values that each get a labelled tick.
+MAX_TICKS = 12
+
 #: A row's point in a panel: ``(y, low, high)``, or ``None`` where it has none there.
 _Point = tuple[float, float | None, float | None]
 _Points = Callable[[Row], _Point | None]
@@ -94,7 +97,9 @@ class PlotSpec:
         x_key: The swept key on the x axis (``None``: nothing swept, one bar group).
         numeric: Whether x is numeric (lines and bands) or categorical (bars).
         log_x: Whether the numeric x axis is logarithmic (:func:`_log_scale`).
-        policies: Every policy, in colour order.
+        categories: The categorical x axis's labels, in every panel the same (``[]``
+            when x is numeric).
+        policies: Every policy, in colour order (and bar order).
         panels: Row by row (values, then each baseline), facet by facet.
         ncols: Panels per row (the number of facets).
     """
@@ -103,6 +108,7 @@ class PlotSpec:
     x_key: str | None
     numeric: bool
     log_x: bool
+    categories: list[str]
     policies: list[str]
     panels: list[Panel]
     ncols: int
@@ -228,12 +234,10 @@ def plot_spec(combined: Combined, confidence: float = 0.95, x: str | None = None
             series = [s for s in found if s is not None]
             panels.append(Panel(row, dict(zip(others, facet, strict=True)), ylabel, series))
     title = _title(combined, confidence)
-    log_x = (
-        x_key is not None
-        and numeric
-        and _log_scale([float(r.setting[x_key]) for r in combined.rows])
-    )
-    return PlotSpec(title, x_key, numeric, log_x, policies, panels, len(facets))
+    xs = ["all" if x_key is None else r.setting[x_key] for r in combined.rows]
+    log_x = numeric and _log_scale([float(x) for x in xs])
+    categories = [] if numeric else list(dict.fromkeys(xs))
+    return PlotSpec(title, x_key, numeric, log_x, categories, policies, panels, len(facets))
 
 
 def _log_scale(values: Sequence[float]) -> bool:
@@ -269,7 +273,7 @@ def plot_figure(spec: PlotSpec) -> Figure:
                 ax.set_xscale("log")
             _draw_lines(ax, panel, colours)
         else:
-            _draw_bars(ax, panel, colours)
+            _draw_bars(ax, panel, spec.categories, list(colours))
         if panel.row != VALUES:
             ax.axhline(0.0, color=colours[panel.row], linestyle="--", linewidth=1.0,
                        label=f"{panel.row} (baseline)")  # fmt: skip
@@ -303,21 +307,22 @@ def _draw_lines(ax: Axes, panel: Panel, colours: dict[str, str]) -> None:
         high = [v for v in s.high if v is not None]
         if len(low) == len(high) == len(x):  # no band where a point has no interval
             ax.fill_between(x, low, high, color=colours[s.policy], alpha=0.2, linewidth=0)
-    if xs:
+    if 0 < len(xs) <= MAX_TICKS:  # each value a tick; more: matplotlib's own ticks
         ax.set_xticks(sorted(xs), [f"{v:g}" for v in sorted(xs)])
         ax.minorticks_off()
 
 
-def _draw_bars(ax: Axes, panel: Panel, colours: dict[str, str]) -> None:
-    """Grouped bars (x categorical), the intervals as error bars."""
-    categories = list(dict.fromkeys(str(x) for s in panel.series for x in s.x))
-    step = 0.8 / max(1, len(panel.series))
-    for i, s in enumerate(panel.series):
+def _draw_bars(ax: Axes, panel: Panel, categories: list[str], policies: list[str]) -> None:
+    """Grouped bars (x categorical), the intervals as error bars; a policy's bar has
+    its place in every panel, so the rows line up."""
+    step = 0.8 / len(policies)
+    for s in panel.series:
+        i = policies.index(s.policy)
         at = np.array([categories.index(str(x)) for x in s.x], dtype=float) - 0.4 + step * (i + 0.5)
         y = np.array(s.y)
         low = np.array([m if v is None else v for m, v in zip(s.y, s.low, strict=True)])
         high = np.array([m if v is None else v for m, v in zip(s.y, s.high, strict=True)])
-        ax.bar(at, y, step, yerr=[y - low, high - y], capsize=2, color=colours[s.policy],
+        ax.bar(at, y, step, yerr=[y - low, high - y], capsize=2, color=f"C{i}",
                label=s.policy)  # fmt: skip
     ax.set_xticks(range(len(categories)), categories)
 

@@ -130,9 +130,18 @@ def test_two_swept_keys_are_facets(tmp_path: Path) -> None:
 
 
 def test_a_categorical_sweep_is_bars(tmp_path: Path) -> None:
+    """Bars over the layouts; lookahead's bars stand at the same places in the row of
+    differences (where MPDM has none) as in the row of means."""
     spec = plot_spec(_combined(_sweep(tmp_path, [5], ["A", "C"])))
     assert (spec.x_key, spec.numeric, spec.ncols) == ("layout", False, 1)
+    assert spec.categories == ["A", "C"]
     assert spec.panels[0].series[0].x == ["A", "C"]
+    means, diffs = plot_figure(spec).axes
+    assert [t.get_text() for t in diffs.get_xticklabels()] == ["A", "C"]
+    assert len(means.patches) == 4
+    assert len(diffs.patches) == 2
+    placed = sorted(p.get_x() for p in means.patches)
+    assert sorted(p.get_x() for p in diffs.patches) == placed[1::2]
 
 
 def test_the_title_names_the_fixed_setting_and_the_seeds(tmp_path: Path) -> None:
