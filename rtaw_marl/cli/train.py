@@ -3,6 +3,7 @@
 Examples::
 
     rtaw-train scenario=poc frames=30000
+    rtaw-train recipe=new_map layout=file layout.path=my.map sim.num_robots=20
     rtaw-train sim.num_robots=10 frames=500000 collector.workers=2
     rtaw-train resume=outputs/train/<date>/<time>/checkpoints/last.pt frames=1000000
 """
@@ -19,7 +20,9 @@ from rtaw_marl.training.config import TrainConfig
 
 
 def run(cfg: DictConfig | TrainConfig) -> None:
-    """Train as configured and print where the checkpoints are."""
+    """Train as configured; print the best evaluation, where the checkpoints are and
+    (``verdict=true``) whether ``best.pt`` beats the setting's best rule on the
+    evaluation seeds."""
     cfg = typed(cfg)
     from rtaw_marl.training.ppo import train
 
@@ -40,6 +43,8 @@ def run(cfg: DictConfig | TrainConfig) -> None:
             f"({gap:+.1f}%) after {result.frames} frames"
         )
     print(f"checkpoints: {result.best_checkpoint} {result.last_checkpoint}")
+    if result.verdict is not None:
+        print(result.verdict.line())
 
 
 main = hydra_entry("train", run)

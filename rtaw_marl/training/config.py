@@ -333,6 +333,11 @@ class TrainConfig(SimGroups):
             ``candidates=K``): LoRR's windows hold ``1.5 M`` tasks, too many for the
             network's attention over all of them. ``None``: every queued task. Not with
             ``mix``, ``interop`` or an imitation warm start.
+        verdict: End by playing ``best.pt`` and the setting's best rule (the best on the
+            selection seeds) on the evaluation seeds 0-19, which nothing in the run
+            chose on: the last line says whether the checkpoint beats the rule, with the
+            paired difference's 95% interval (``verdict.json`` in the run folder;
+            :mod:`rtaw_marl.training.verdict`). Costs 20 episodes of each.
     """
 
     model: Any
@@ -353,6 +358,7 @@ class TrainConfig(SimGroups):
     mix: list[str] = field(default_factory=list)
     init_actor: str | None = None
     candidates: int | None = None
+    verdict: bool = True
 
     def __post_init__(self) -> None:
         check_fields(self)

@@ -19,8 +19,10 @@ learns what its own search would choose and the next round's search starts stron
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
+import json
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -31,6 +33,7 @@ from rtaw_marl.errors import missing_extra
 try:
     import torch
     from tensordict import TensorDict
+    from tqdm import tqdm
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
@@ -44,8 +47,9 @@ from rtaw_marl.policies.network import NetworkPolicy
 from rtaw_marl.policies.search_policy import SearchPolicy, load_search
 from rtaw_marl.sim.builder import SimSpec
 from rtaw_marl.training.config import ImitationConfig
+from rtaw_marl.utils.atomic import atomic_write
 
-__all__ = ["imitate"]
+__all__ = ["IMITATION_FILE", "ImitationLog", "imitate"]
 
 
 @dataclass
@@ -69,6 +73,8 @@ def imitate(
     gamma: float,
     reward_scale: float,
     mix: Sequence[SimSpec] = (),
+    progress: bool = False,
+    after_round: Callable[[], dict[str, float]] | None = None,
 ) -> list[dict[str, float]]:
     """Warm-start ``actor`` (and ``critic``) in place; one row of figures per round.
 
@@ -83,11 +89,14 @@ def imitate(
         reward_scale: PPO's reward scale, for the critic's targets.
         mix: A mix's member specs (``num_envs / len(mix)`` simulators of each) instead
             of ``spec`` alone.
+        progress: Show a progress bar of the labelled decisions (with its time left).
+        after_round: Called after each round's fit; what it returns joins the round's
+            row (the trainer's greedy evaluation on the selection seeds).
 
     Returns:
         Per round: ``round``, ``decisions`` labelled so far, ``agreement`` (how often the
         student already chose the teacher's task in the states it drove into), the
-        fitted ``accuracy`` and ``loss``.
+        fitted ``accuracy`` and ``loss``, and what ``after_round`` returned.
     """
     rule = None if cfg.teacher == "search" else make_baseline(cfg.teacher, params=BaselinesConfig())
     keys = tuple(dict.fromkeys((*actor.in_keys, *critic.in_keys)))
@@ -100,16 +109,28 @@ def imitate(
     optim = torch.optim.Adam([*actor.parameters(), *critic.parameters()], lr=cfg.lr)
     rounds: list[_Round] = []
     rows = []
+    total = cfg.rounds * steps * len(env.sims)
+    bar = tqdm(total=total, desc="imitation", unit="dec", disable=not progress)
     for r in range(cfg.rounds):
         teacher = rule or _search_teacher(cfg.search, actor, critic, None if mix else reward_scale)
         teacher.reset(seed)  # its ties are broken by the run's seed, as everything else
-        data, agreement = _collect(env, teacher, actor, keys, steps, student=r > 0)
+        bar.set_postfix(round=r, teacher=cfg.teacher if r == 0 else "student")
+        data, agreement = _collect(env, teacher, actor, keys, steps, student=r > 0, bar=bar)
         if r > 0:  # the critic learns the student's values, not the teacher's
             data.returns = _returns(data.observations, gamma, reward_scale)
         rounds.append(data)
+        bar.set_postfix(round=r, fitting=sum(x.labels.numel() for x in rounds))
         fit = _fit(cfg, actor, critic, optim, rounds)
-        rows.append({"round": r, "decisions": sum(x.labels.numel() for x in rounds),
-                     "agreement": agreement, **fit})  # fmt: skip
+        row = {"round": r, "decisions": sum(x.labels.numel() for x in rounds),
+               "agreement": agreement, **fit}  # fmt: skip
+        if after_round is not None:
+            row.update(after_round())
+            if "ttd" in row:
+                bar.set_postfix(
+                    round=r, accuracy=f"{fit['accuracy']:.2f}", eval_ttd=f"{row['ttd']:.0f}"
+                )
+        rows.append(row)
+    bar.close()
     return rows
 
 
@@ -140,6 +161,7 @@ def _collect(
     steps: int,
     *,
     student: bool,
+    bar: tqdm,
 ) -> tuple[_Round, float]:
     """``steps`` decisions of every simulator, driven by the teacher or the student."""
     td = env.reset()
@@ -155,6 +177,7 @@ def _collect(
         step = td.select(*keys, "action_mask", "action")
         frames.append(step.set("next", out["next"].select("reward", "done")))
         labels.append(label)
+        bar.update(len(env.sims))
         td = out["next"]
         if bool(td["done"].any()):  # the finished simulators only (a mix's differ)
             # TorchRL keeps the other rows from the tensordict given: hand it all of them.
@@ -212,3 +235,27 @@ def _fit(
             hits += int((logits.argmax(-1) == labels[idx]).sum())
             total += len(idx)
     return {"accuracy": hits / max(total, 1), "loss": loss_sum / max(total, 1)}
+
+
+#: The warm start's rows in the run folder, for the curve (a resumed run reads them).
+IMITATION_FILE = "imitation.json"
+
+
+class ImitationLog:
+    """The warm start's rounds of a run (:func:`imitate`'s rows), kept in ``path``.
+
+    Args:
+        path: ``<run>/imitation.json``; what it holds is read now (none: no rows).
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.rows: list[dict[str, float]] = []
+        if path.exists():
+            self.rows = [dict(row) for row in json.loads(path.read_text())]
+
+    def save(self, rows: list[dict[str, float]]) -> None:
+        """Keep ``rows`` (atomically)."""
+        self.rows = [dict(row) for row in rows]
+        data = json.dumps(self.rows, indent=1).encode()
+        atomic_write(self.path, lambda fh: fh.write(data))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 import signal
 import sys
 import time
@@ -46,7 +47,7 @@ from rtaw_marl.training.checkpoints import (
 from rtaw_marl.training.collectors import build_collector, learner_device
 from rtaw_marl.training.config import PPOConfig, TrainConfig
 from rtaw_marl.training.evaluator import Evaluator, greedy_ttd
-from rtaw_marl.training.imitation import imitate
+from rtaw_marl.training.imitation import IMITATION_FILE, ImitationLog, imitate
 from rtaw_marl.training.interop import (
     BATCHED_KEYS,
     INTEROP_KEYS,
@@ -55,6 +56,9 @@ from rtaw_marl.training.interop import (
     standardize_acting_advantage,
 )
 from rtaw_marl.training.loggers import RunLogger, build_logger, check_installed, quiet_torchrl_logs
+from rtaw_marl.training.progress import Clock, Estimate, WallClock
+from rtaw_marl.training.verdict import Verdict, judge
+from rtaw_marl.utils.atomic import atomic_write
 from rtaw_marl.utils.plain import as_plain
 from rtaw_marl.utils.runs import claim_folder
 from rtaw_marl.utils.signals import Interrupted, deferred_interrupt
@@ -81,6 +85,8 @@ class TrainResult:
     rule: str = "lookahead"
     #: Seconds spent per phase over the run (``time/collect_s``, ``time/update_s``, ...).
     timings: dict[str, float] = field(default_factory=dict)
+    #: ``best.pt`` against the best rule on the evaluation seeds (``verdict=true``).
+    verdict: Verdict | None = None
 
 
 @dataclass
@@ -92,89 +98,6 @@ class Learner:
     loss: ClipPPOLoss
     gae: GAE
     optim: torch.optim.Optimizer
-
-
-class Clock:
-    """Wall time of each phase of one iteration (logged as ``time/<phase>_s``)."""
-
-    def __init__(self) -> None:
-        self.laps: dict[str, float] = {}
-        self._last = time.perf_counter()
-
-    def lap(self, name: str) -> None:
-        """Charge the time since the last lap to ``name``."""
-        now = time.perf_counter()
-        self.laps[name] = self.laps.get(name, 0.0) + now - self._last
-        self._last = now
-
-    def reset(self) -> None:
-        """Start the next iteration: the collector's time counts from here."""
-        self.laps = {}
-        self._last = time.perf_counter()
-
-
-class Estimate:
-    """The run's remaining wall time, from the frames/s measured so far and the measured
-    cost of an evaluation; :meth:`report` prints it once, after the first batches.
-
-    Args:
-        cfg: The run's config (budget and evaluation period).
-        frames: Frames at the start of this session (the resume point).
-    """
-
-    #: Runs estimated to take longer than this print their estimate (seconds).
-    LONG_S = 60.0
-    #: Past this the estimate is a warning: the budget is likely a typo (a week).
-    ABSURD_S = 7 * 24 * 3600.0
-    #: Batches measured before the estimate is printed (the first includes start-up).
-    BATCHES = 3
-
-    def __init__(self, cfg: TrainConfig, frames: int) -> None:
-        self.total, self.every, self.start = cfg.frames, cfg.selection.every_frames, frames
-        self.batch, self.batches, self.told = cfg.algo.frames_per_batch, 0, False
-        self.rate = 0.0
-
-    def seconds(self, frames: int, totals: dict[str, float], eval_s: list[float]) -> float:
-        """Seconds left at ``frames``: training at the measured rate plus the evaluations
-        still due at their measured mean cost."""
-        train_s = sum(v for k, v in totals.items() if k != "time/eval_checkpoint_s")
-        self.rate = (frames - self.start) / max(train_s, 1e-9)
-        left = self.total - frames
-        per_eval = sum(eval_s) / len(eval_s) if eval_s else 0.0
-        return left / self.rate + -(-left // self.every) * per_eval
-
-    def report(self, frames: int, totals: dict[str, float], eval_s: list[float]) -> str:
-        """The estimate for the progress bar; prints it once when the run is long."""
-        self.batches += 1
-        seconds = self.seconds(frames, totals, eval_s)
-        due = self.batches >= min(self.BATCHES, -(-(self.total - self.start) // self.batch))
-        if not self.told and (due or seconds > self.ABSURD_S):
-            self.told = True
-            if seconds > self.ABSURD_S:
-                tqdm.write(
-                    f"warning: frames={self.total} would take about {_duration(seconds)} "
-                    f"at the measured {self.rate:.0f} frames/s; Ctrl-C or SIGTERM saves and stops",
-                    file=sys.stderr,
-                )
-            elif seconds > self.LONG_S:
-                tqdm.write(
-                    f"estimated time left: {_duration(seconds)} ({self.total - frames} frames "
-                    f"at {self.rate:.0f} frames/s, evaluations included)",
-                    file=sys.stdout,
-                )
-        return _duration(seconds)
-
-
-def _duration(seconds: float) -> str:
-    """``45s``, ``12m05s``, ``3h07m``, ``4.2 days``, ``3.1e+04 years``."""
-    if seconds < 60:
-        return f"{seconds:.0f}s"
-    if seconds < 3600:
-        return f"{int(seconds // 60)}m{int(seconds % 60):02d}s"
-    if seconds < 48 * 3600:
-        return f"{int(seconds // 3600)}h{int(seconds % 3600 // 60):02d}m"
-    days = seconds / 86400
-    return f"{days:.1f} days" if days < 730 else f"{days / 365.25:.3g} years"
 
 
 def train(cfg: TrainConfig, run_dir: str | Path) -> TrainResult:
@@ -214,17 +137,19 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
     if cfg.resume:
         progress, history = resume(cfg, nets, learner.optim, run_dir)
         trim_csv_logs(run_dir / "logs", progress.frames)
+    wall = WallClock(history)
     evaluator = Evaluator(
         spec, [int(s) for s in cfg.selection.seeds], history, nets[0].in_keys, cfg.candidates,
-        cfg.selection.metric,
+        cfg.selection.metric, progress=cfg.progress,
     )  # fmt: skip
     # A mix's rewards come in units of each member's L already.
     reward_scale = cfg.algo.reward_scale or 1.0 / (1.0 if cfg.mix else evaluator.env.scale)
     logger = build_logger(run_dir, cfg.logger, config=as_plain(cfg))
     if cfg.init_actor is not None and progress.frames == 0:
         _init_actor(cfg, learner.actor_net)
+    imitation = ImitationLog(run_dir / IMITATION_FILE)
     if cfg.imitation.teacher is not None and progress.frames == 0:
-        _warm_start(cfg, spec, learner, logger, reward_scale)
+        _warm_start(cfg, spec, learner, logger, reward_scale, evaluator, wall, imitation)
     # Local worker processes or Ray actors; they act on CPUs, the learner on `device`.
     collector = build_collector(
         cfg, spec, learner.loss.actor_network, device, progress, observed(nets)
@@ -235,7 +160,9 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
         batch_size=cfg.algo.minibatch_size,
     )
     saver = Checkpoints(cfg, run_dir / "checkpoints", nets, learner.optim, progress)
-    bar = tqdm(total=cfg.frames, initial=progress.frames, unit="fr", disable=not cfg.progress)
+    bar = tqdm(
+        total=cfg.frames, initial=progress.frames, desc="PPO", unit="fr", disable=not cfg.progress
+    )  # fmt: skip
     start = time.perf_counter()
 
     postfix: dict[str, str] = {}
@@ -243,17 +170,9 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
 
     def evaluate_and_save() -> None:
         began = time.perf_counter()
-        row = evaluator.run(_on_cpu(learner.actor_net), progress, began - start)
+        row = evaluator.run(_on_cpu(learner.actor_net), progress, wall())
         logger.log({f"eval/{k}": v for k, v in row.items() if k != "frames"}, progress.frames)
-        if cfg.selection.metric == "tasks_finished":
-            postfix.update(
-                eval_tasks=f"{row['tasks_finished']:.0f}",
-                mpdm_tasks=f"{row['mpdm_tasks_finished']:.0f}",
-                **{f"{evaluator.rule}_tasks": f"{row[f'{evaluator.rule}_tasks_finished']:.0f}"},
-            )
-        else:
-            postfix.update(eval_ttd=f"{row['ttd']:.0f}", mpdm_ttd=f"{row['mpdm_ttd']:.0f}")
-            postfix[f"{evaluator.rule}_ttd"] = f"{row[f'{evaluator.rule}_ttd']:.0f}"
+        postfix.update(_postfix(row, evaluator.rule, cfg.selection.metric))
         bar.set_postfix(postfix)
         saver.save(row, evaluator.history)
         eval_s.append(time.perf_counter() - began)
@@ -301,12 +220,7 @@ def _train(cfg: TrainConfig, run_dir: Path) -> TrainResult:
             logger.close()
     if stop.requested:
         raise Interrupted(_interrupted(saver, evaluator.history), stop.signum or signal.SIGINT)
-    plot_training_curve(evaluator.history, run_dir / "training_curve.png")
-    best = min(evaluator.history, key=lambda r: (score(r), r["frames"]))
-    return TrainResult(
-        run_dir, saver.last, saver.best, progress.frames, evaluator.mpdm_ttd,
-        best["ttd"], evaluator.history, timings=totals, best=best, rule=evaluator.rule,
-    )  # fmt: skip
+    return _finish(cfg, spec, run_dir, evaluator, saver, imitation, totals)
 
 
 def _interrupted(saver: Checkpoints, history: list[dict[str, float]]) -> str:
@@ -318,17 +232,73 @@ def _interrupted(saver: Checkpoints, history: list[dict[str, float]]) -> str:
     return f"{path} saved at {frames} frames; continue with resume={path}"
 
 
+def _postfix(row: dict[str, float], rule: str, metric: str) -> dict[str, str]:
+    """The progress bar's figures: the policy's last evaluation, MPDM's and the best
+    rule's, on the selection seeds."""
+    key = "tasks_finished" if metric == "tasks_finished" else "ttd"
+    short = "tasks" if metric == "tasks_finished" else "ttd"
+    return {
+        f"eval_{short}": f"{row[key]:.0f}",
+        f"mpdm_{short}": f"{row[f'mpdm_{key}']:.0f}",
+        "best_rule": f"{rule} {row[f'{rule}_{key}']:.0f}",
+    }
+
+
+def _finish(
+    cfg: TrainConfig,
+    spec: SimSpec,
+    run_dir: Path,
+    evaluator: Evaluator,
+    saver: Checkpoints,
+    imitation: ImitationLog,
+    totals: dict[str, float],
+) -> TrainResult:
+    """The curve, the verdict on the evaluation seeds, the result."""
+    plot_training_curve(
+        evaluator.history, run_dir / "training_curve.png", rules=evaluator.rules,
+        rule=evaluator.rule, metric=cfg.selection.metric, imitation=imitation.rows,
+    )  # fmt: skip
+    best = min(evaluator.history, key=lambda r: (score(r), r["frames"]))
+    verdict = None
+    if cfg.verdict:
+        verdict = judge(
+            spec, saver.best, evaluator.rule, evaluator.seeds, metric=cfg.selection.metric,
+            candidates=cfg.candidates,
+        )  # fmt: skip
+        data = json.dumps(verdict.as_dict(), indent=2).encode()
+        atomic_write(run_dir / "verdict.json", lambda fh: fh.write(data))
+    return TrainResult(
+        run_dir, saver.last, saver.best, saver.progress.frames, evaluator.mpdm_ttd,
+        best["ttd"], evaluator.history, timings=totals, best=best, rule=evaluator.rule,
+        verdict=verdict,
+    )  # fmt: skip
+
+
 def _warm_start(
-    cfg: TrainConfig, spec: SimSpec, learner: Learner, logger: RunLogger, reward_scale: float
+    cfg: TrainConfig,
+    spec: SimSpec,
+    learner: Learner,
+    logger: RunLogger,
+    reward_scale: float,
+    evaluator: Evaluator,
+    wall: WallClock,
+    log: ImitationLog,
 ) -> None:
     """Imitation rounds before PPO (their own episode seeds, on CPU), logged as
-    ``imitation/*``."""
+    ``imitation/*``; after each round the network plays the selection seeds greedily
+    (the curve's imitation phase, kept in ``imitation.json``)."""
     actor, critic = _on_cpu(learner.actor_net), _on_cpu(learner.critic_net)
+
+    def after_round() -> dict[str, float]:
+        return {**evaluator.measure(actor), "wall_s": wall()}
+
     rows = imitate(
         cfg.imitation, spec, actor, critic,
         num_envs=cfg.collector.envs_per_worker, seed=cfg.seed * 7919 + 104_729,
         gamma=cfg.algo.gamma, reward_scale=reward_scale, mix=mix_specs(cfg.mix),
+        progress=cfg.progress, after_round=after_round,
     )  # fmt: skip
+    log.save(rows)
     if actor is not learner.actor_net:  # a GPU learner: bring the warm start over
         learner.actor_net.load_state_dict(actor.state_dict())
         learner.critic_net.load_state_dict(critic.state_dict())

@@ -21,7 +21,9 @@ from rtaw_marl.config import compose, to_typed
 from rtaw_marl.errors import ConfigError
 from rtaw_marl.models.checkpoint import load_checkpoint, save_checkpoint
 from rtaw_marl.training.loggers import METRICS_CSV, read_metrics
-from rtaw_marl.training.ppo import Estimate, _duration, train
+from rtaw_marl.training.ppo import train
+from rtaw_marl.training.progress import Estimate
+from rtaw_marl.training.progress import duration as _duration
 
 pytestmark = pytest.mark.integration
 

@@ -219,6 +219,8 @@ def test_train_then_eval_cli_on_other_sizes(tmp_path: Path) -> None:
         timeout=300,
     )
     assert run.returncode == 0, run.stderr
+    # The last word: best.pt against the setting's best rule on the evaluation seeds.
+    assert run.stdout.strip().splitlines()[-1].startswith("verdict: best.pt "), run.stdout
     ckpt = tmp_path / "run" / "checkpoints" / "best.pt"
     ev = subprocess.run(
         [
