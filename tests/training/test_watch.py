@@ -45,7 +45,8 @@ def test_the_verdict_says_beats_loses_or_ties_by_the_interval() -> None:
     assert better.outcome == "beats"
     assert better.line().startswith("verdict: best.pt beats hungarian (the best rule on ")
     assert "selection seeds 1000-1001) on evaluation seeds 0-3: TTD" in better.line()
-    assert better.diff.pct_low is not None and better.diff.pct_low > 0
+    assert better.diff.pct_low is not None
+    assert better.diff.pct_low > 0
     assert "TTD 104.5 against 115.0, a gain of +9.1% [+7.3, +10.9]" in better.line()
     assert _verdict(rule, [110.0, 121.0, 131.0, 142.0]).outcome == "loses to"
     tie = _verdict(rule, [99.0, 112.0, 119.0, 131.0])
@@ -92,7 +93,8 @@ def test_a_warm_started_run_shows_every_phase_and_ends_with_its_verdict(
 
     # The verdict: best.pt and the best rule on the evaluation seeds, as rtaw-eval plays them.
     verdict = result.verdict
-    assert verdict is not None and verdict.rule == result.rule
+    assert verdict is not None
+    assert verdict.rule == result.rule
     assert verdict.seeds == tuple(EVAL_SEEDS)
     sim = build_sim(cfg.sim_spec())
     played = evaluate(
@@ -103,7 +105,8 @@ def test_a_warm_started_run_shows_every_phase_and_ends_with_its_verdict(
     assert verdict.diff.baseline_mean == pytest.approx(np.mean(played["rule"]["ttd"]))
     assert verdict.diff.other_mean == pytest.approx(np.mean(played["net"]["ttd"]))
     stored = json.loads((tmp_path / "verdict.json").read_text())
-    assert stored["line"] == verdict.line() and stored["rule"] == result.rule
+    assert stored["line"] == verdict.line()
+    assert stored["rule"] == result.rule
 
 
 def test_the_curve_puts_the_warm_start_first_on_the_frames_axis() -> None:
@@ -128,7 +131,8 @@ def test_the_curve_draws_with_and_without_the_rules(tmp_path: Path) -> None:
     history = [{"frames": 0, "ttd": 25.0, "wall_s": 3.0, "mpdm_ttd": 40.0, "lookahead_ttd": 24.0}]
     rules = {"mpdm": [39.0, 41.0, 40.0], "hungarian": [23.0, 22.0, 24.0]}
     drawn = plot_training_curve(history, tmp_path / "a.png", rules=rules, rule="hungarian")
-    assert drawn is not None and drawn.stat().st_size > 10_000
+    assert drawn is not None
+    assert drawn.stat().st_size > 10_000
     assert plot_training_curve(history, tmp_path / "b.png") is not None  # an older run's rows
     assert plot_training_curve([], tmp_path / "c.png") is None
 
@@ -136,7 +140,8 @@ def test_the_curve_draws_with_and_without_the_rules(tmp_path: Path) -> None:
 def test_the_new_map_recipe_continues_the_generalist() -> None:
     cfg = to_typed(compose("train", ["recipe=new_map", "layout=open"]))
     assert cfg.init_actor == "generalist_plus"
-    assert cfg.model.name == "rtaw_plus" and cfg.model.fleet_summary
+    assert cfg.model.name == "rtaw_plus"
+    assert cfg.model.fleet_summary
     assert (cfg.algo.lr, cfg.frames, cfg.selection.every_frames) == (0.0003, 409_600, 40_960)
     assert cfg.verdict
     with pytest.raises(ConfigError, match="new_map"):
