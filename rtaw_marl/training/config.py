@@ -41,9 +41,11 @@ DEVICES = ("auto", "cpu", "cuda")
 #: The largest ``frames``: steps are logged as floats, exact up to 2**53.
 MAX_FRAMES = 2**53
 
-#: What an imitation warm start can learn from: two rules, or ``search`` with a
-#: network (by default the one being trained: expert iteration).
-TEACHERS = ("lookahead", "hindsight", "search")
+#: What an imitation warm start can learn from: a rule (``hindsight`` sees the future),
+#: ``best`` (the setting's best rule on the selection seeds, as the run's evaluator
+#: chooses it), or ``search`` with a network (by default the one being trained: expert
+#: iteration).
+TEACHERS = ("lookahead", "hungarian", "batch", "mpdm", "rbts", "hindsight", "best", "search")
 
 
 @dataclass(kw_only=True)
@@ -245,8 +247,10 @@ class ImitationConfig:
     :mod:`rtaw_marl.training.imitation`).
 
     Attributes:
-        teacher: ``lookahead`` or ``hindsight`` (the ``baselines`` defaults' horizons),
-            or ``search``: the search of :mod:`rtaw_marl.policies.search` over the
+        teacher: A rule (``lookahead``, ``hungarian``, ``batch``, ``mpdm``, ``rbts``,
+            or ``hindsight``, which sees the future; the ``baselines`` defaults),
+            ``best``: the best of the five online rules on the selection seeds, which
+            the run plays anyway (the bar of its curve and verdict), or ``search``: the search of :mod:`rtaw_marl.policies.search` over the
             network being trained, as it is at each round's start (expert iteration:
             each round's search is guided by the previous round's network), or over
             the fixed ``imitation.search.policy`` when set; ``None``: no warm start.

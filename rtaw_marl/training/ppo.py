@@ -292,8 +292,11 @@ def _warm_start(
     def after_round() -> dict[str, float]:
         return {**evaluator.measure(actor), "wall_s": wall()}
 
+    imitation = cfg.imitation
+    if imitation.teacher == "best":  # the rule the run is judged against
+        imitation = dataclasses.replace(imitation, teacher=evaluator.rule)
     rows = imitate(
-        cfg.imitation, spec, actor, critic,
+        imitation, spec, actor, critic,
         num_envs=cfg.collector.envs_per_worker, seed=cfg.seed * 7919 + 104_729,
         gamma=cfg.algo.gamma, reward_scale=reward_scale, mix=mix_specs(cfg.mix),
         progress=cfg.progress, after_round=after_round,

@@ -109,6 +109,15 @@ def test_a_warm_started_run_shows_every_phase_and_ends_with_its_verdict(
     assert stored["rule"] == result.rule
 
 
+def test_a_best_teacher_imitates_the_rule_the_evaluator_chose(
+    train_cfg, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    overrides = [o for o in WARM if not o.startswith("imitation.teacher")]
+    cfg = train_cfg([*overrides, "imitation.teacher=best", "progress=true"])
+    result = train(cfg, tmp_path)
+    assert f"teacher={result.rule}" in capsys.readouterr().err
+
+
 def test_the_curve_puts_the_warm_start_first_on_the_frames_axis() -> None:
     imitation = [
         {"round": 0, "decisions": 100, "ttd": 30.0, "wall_s": 1.0},
@@ -143,6 +152,8 @@ def test_the_new_map_recipe_continues_the_generalist() -> None:
     assert cfg.model.name == "rtaw_plus"
     assert cfg.model.fleet_summary
     assert (cfg.algo.lr, cfg.frames, cfg.selection.every_frames) == (0.0003, 409_600, 40_960)
+    assert cfg.imitation.teacher == "best"
+    assert cfg.selection.seeds == list(range(1000, 1040))
     assert cfg.verdict
     with pytest.raises(ConfigError, match="new_map"):
         compose("train", ["recipe=new_mpa"])
