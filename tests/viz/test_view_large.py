@@ -191,7 +191,7 @@ def test_difference_colours_each_episodes_jam(large: Any) -> None:
 
 def test_headings_point_where_robots_face(large: Any) -> None:
     """Zoomed in (40 pixels a cell), a robot of heading h (robot % 4: east, south, west,
-    north) has the light triangle ahead of its centre and its state's colour behind."""
+    north) has the light bar ahead of its centre and its state's colour behind."""
     driver = large
     driver.execute_script("window.rtawView.seek(0)")
     driver.execute_script("window.rtawView.setCamera(40, -40 * 150, -40 * 38)")

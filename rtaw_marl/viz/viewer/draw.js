@@ -131,41 +131,41 @@ function inView(panel) {
 }
 
 // Zoomed in: the map, then robots in view as rectangles that glide between cells, one
-// path per state colour, and their headings when they turn.
+// path per state colour, and their headings when they turn. Robots in view are found
+// once per frame (their index and drawn cell), then drawn from that list.
 function drawRobotRects(panel, frac) {
   const ep = panel.ep, ctx = panel.ctx;
   ctx.drawImage(view.map, 0, 0);
   const [x0, y0, x1, y1] = inView(panel);
   drawQueued(panel, x0, y0, x1, y1);
-  const pad = 0.12;
-  for (let st = 0; st < 3; st++) {
-    ctx.beginPath();
-    for (let m = 0; m < ep.M; m++) {
-      if (ep.state[m] !== st) continue;
-      const [x, y] = drawnXY(ep, m, frac);
-      if (x < x0 || x > x1 || y < y0 || y > y1) continue;
-      ctx.rect(x + pad, y + pad, 1 - 2 * pad, 1 - 2 * pad);
-    }
-    ctx.fillStyle = STATE_COLORS[st];
-    ctx.fill();
-  }
-  if (ep.head) drawHeadings(panel, frac, x0, y0, x1, y1);
-}
-
-// A robot's heading (0 east, 1 south, 2 west, 3 north): a triangle inside its square,
-// pointing where a forward move takes it; turning, it rotates with the clock.
-function drawHeadings(panel, frac, x0, y0, x1, y1) {
-  const ep = panel.ep, ctx = panel.ctx;
-  ctx.beginPath();
+  if (!panel.vis) { panel.vis = new Int32Array(ep.M); panel.vxy = new Float32Array(2 * ep.M); }
+  const vis = panel.vis, vxy = panel.vxy;
+  let n = 0;
   for (let m = 0; m < ep.M; m++) {
     const [x, y] = drawnXY(ep, m, frac);
     if (x < x0 || x > x1 || y < y0 || y > y1) continue;
-    const turn = ep.turnAt(m, ep.at), a = (ep.head[m] + (turn === 1 ? frac : turn === 3 ? -frac : 0)) * Math.PI / 2;
-    const c = Math.cos(a), s = Math.sin(a), cx = x + 0.5, cy = y + 0.5;
-    ctx.moveTo(cx + 0.34 * c, cy + 0.34 * s);
-    ctx.lineTo(cx - 0.16 * c - 0.2 * s, cy - 0.16 * s + 0.2 * c);
-    ctx.lineTo(cx - 0.16 * c + 0.2 * s, cy - 0.16 * s - 0.2 * c);
-    ctx.closePath();
+    vis[n] = m; vxy[2 * n] = x; vxy[2 * n + 1] = y; n++;
+  }
+  const pad = 0.12;
+  for (let st = 0; st < 3; st++) {
+    ctx.beginPath();
+    for (let i = 0; i < n; i++) if (ep.state[vis[i]] === st) ctx.rect(vxy[2 * i] + pad, vxy[2 * i + 1] + pad, 1 - 2 * pad, 1 - 2 * pad);
+    ctx.fillStyle = STATE_COLORS[st];
+    ctx.fill();
+  }
+  if (ep.head) drawHeadings(panel, frac, n);
+}
+
+// A robot's heading (0 east, 1 south, 2 west, 3 north): a light bar on the side of its
+// square it faces, where a forward move takes it; a turning robot faces its new way
+// from half the timestep. Bars are rectangles: one fast path, as the robots' squares.
+const TICK_X = [0.6, 0.3, 0.2, 0.3], TICK_Y = [0.3, 0.6, 0.3, 0.2], TICK_W = [0.2, 0.4, 0.2, 0.4], TICK_H = [0.4, 0.2, 0.4, 0.2];
+function drawHeadings(panel, frac, n) {
+  const ep = panel.ep, ctx = panel.ctx, vis = panel.vis, vxy = panel.vxy, half = frac >= 0.5;
+  ctx.beginPath();
+  for (let i = 0; i < n; i++) {
+    const m = vis[i], h = half ? (ep.head[m] + ep.turnAt(m, ep.at)) & 3 : ep.head[m];
+    ctx.rect(vxy[2 * i] + TICK_X[h], vxy[2 * i + 1] + TICK_Y[h], TICK_W[h], TICK_H[h]);
   }
   ctx.fillStyle = HEADING_COLOR;
   ctx.fill();
