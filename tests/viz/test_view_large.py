@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import io
 import math
+import time
 from pathlib import Path
 from typing import Any
 
@@ -238,7 +239,8 @@ def test_throughput_window(large: Any) -> None:
 
 
 def test_a_square_map_keeps_panels_side_by_side(tmp_path: Path) -> None:
-    """Two episodes on a square map: side by side gives larger cells."""
+    """Two episodes on a square map: side by side gives larger cells; in a tall window,
+    stacked does, and a resize changes the layout (and refits the map)."""
     browser_or_skip()
     layout = Layout(np.zeros((HEIGHT, HEIGHT), dtype=bool), name="square")
     still = Schedule(
@@ -252,3 +254,12 @@ def test_a_square_map_keeps_panels_side_by_side(tmp_path: Path) -> None:
         left, right = _panels(driver)
         assert not driver.execute_script("return window.rtawView.state().stacked")
         assert right["left"] >= left["right"] - 1
+        wide = driver.execute_script("return window.rtawView.state().scale")
+        driver.set_window_size(700, 1600)
+        time.sleep(0.3)  # the resize event, then a frame
+        top, bottom = _panels(driver)
+        state = driver.execute_script("return window.rtawView.state()")
+        assert state["stacked"]
+        assert bottom["top"] >= top["bottom"] - 1
+        assert state["scale"] == pytest.approx(min(top["width"], top["height"]) / HEIGHT)
+        assert state["scale"] != pytest.approx(wide)
