@@ -2,14 +2,18 @@
 
 The page holds its data and its code inline (no server, no network): open it in a
 browser from the disk. It replays one executed episode, or two side by side on the
-same map and clock (two policies on the same seed), drawn on a canvas:
+same map and clock (two policies on the same seed), side by side or stacked (whichever
+gives the map larger cells), drawn on a canvas:
 
 * robots coloured by state (idle, on the way to a pickup, carrying), with a legend;
 * play, pause, speed, a timeline to scrub, zoom (wheel) and pan (drag);
+* robots' headings, zoomed in, when they turn;
 * click a robot: its task, its path from assignment to delivery and its waits; find a
-  robot (``12``) or a task (``t34``) by id and follow it;
+  robot (``12``) or a task (``t34``, its stream id: the same task in both episodes) by
+  id and follow it;
 * a congestion heat map (waits per cell, per time bin) beside the map and optionally on
-  it, and a chart of tasks delivered over time.
+  it, per block of cells when cells are small, or the difference of the two episodes;
+  and a chart of tasks delivered over time, smoothed over a window the user sets.
 
 What the page reads is described in :mod:`rtaw_marl.viz.episode_data`. ``window.rtawView``
 exposes the view's state and a few controls, which the browser tests drive.
