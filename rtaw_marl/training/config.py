@@ -45,7 +45,9 @@ MAX_FRAMES = 2**53
 #: ``best`` (the setting's best rule on the selection seeds, as the run's evaluator
 #: chooses it), or ``search`` with a network (by default the one being trained: expert
 #: iteration).
-TEACHERS = ("lookahead", "hungarian", "batch", "mpdm", "rbts", "hindsight", "best", "search")
+TEACHERS = (
+    "lookahead", "hungarian", "batch", "mpdm", "rbts", "hindsight", "best", "search",
+)  # fmt: skip
 
 
 @dataclass(kw_only=True)
@@ -250,10 +252,11 @@ class ImitationConfig:
         teacher: A rule (``lookahead``, ``hungarian``, ``batch``, ``mpdm``, ``rbts``,
             or ``hindsight``, which sees the future; the ``baselines`` defaults),
             ``best``: the best of the five online rules on the selection seeds, which
-            the run plays anyway (the bar of its curve and verdict), or ``search``: the search of :mod:`rtaw_marl.policies.search` over the
-            network being trained, as it is at each round's start (expert iteration:
-            each round's search is guided by the previous round's network), or over
-            the fixed ``imitation.search.policy`` when set; ``None``: no warm start.
+            the run plays anyway (the bar of its curve and verdict), or ``search``:
+            the search of :mod:`rtaw_marl.policies.search` over the network being
+            trained, as it is at each round's start (expert iteration: each round's
+            search is guided by the previous round's network), or over the fixed
+            ``imitation.search.policy`` when set; ``None``: no warm start.
         frames: Teacher-labelled decisions in all rounds together (not counted in
             ``frames``, which counts PPO's).
         rounds: Round 0 follows the teacher; rounds 1.. follow the student (DAgger).
