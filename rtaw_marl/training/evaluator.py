@@ -14,7 +14,6 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 import numpy as np
-from tqdm import tqdm
 
 from rtaw_marl.errors import missing_extra
 
@@ -22,6 +21,7 @@ from rtaw_marl.errors import missing_extra
 # of a bare ModuleNotFoundError.
 try:
     import torch
+    from tqdm import tqdm
 except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 

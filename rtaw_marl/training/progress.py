@@ -6,7 +6,14 @@ from __future__ import annotations
 import sys
 import time
 
-from tqdm import tqdm
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    from tqdm import tqdm
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.training.config import TrainConfig
 
