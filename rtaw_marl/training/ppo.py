@@ -263,7 +263,7 @@ def _finish(
     if cfg.verdict:
         verdict = judge(
             spec, saver.best, evaluator.rule, evaluator.seeds, metric=cfg.selection.metric,
-            candidates=cfg.candidates,
+            candidates=cfg.candidates, progress=cfg.progress,
         )  # fmt: skip
         data = json.dumps(verdict.as_dict(), indent=2).encode()
         atomic_write(run_dir / "verdict.json", lambda fh: fh.write(data))

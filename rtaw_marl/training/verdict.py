@@ -15,6 +15,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from rtaw_marl.errors import missing_extra
+
+# Without the training extra: one error that names it (errors.missing_extra), no traceback
+# of a bare ModuleNotFoundError.
+try:
+    from tqdm import tqdm
+except ModuleNotFoundError as exc:
+    raise missing_extra(exc, __name__, "train") from None
+
 from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
 from rtaw_marl.policies import BaselinesConfig, make_baseline
@@ -95,6 +104,7 @@ def judge(
     metric: str = "ttd",
     candidates: int | None = None,
     seeds: Sequence[int] = EVAL_SEEDS,
+    progress: bool = False,
 ) -> Verdict:
     """Play ``checkpoint``'s greedy policy and ``rule`` on ``seeds`` of ``spec``.
 
@@ -106,6 +116,7 @@ def judge(
         metric: ``ttd`` (lower is better) or ``tasks_finished`` (higher is better).
         candidates: The policy's and ``lookahead``'s candidate tasks, as in training.
         seeds: Evaluation seeds (0-19).
+        progress: Show a progress bar over the seeds (the run's last phase).
 
     Returns:
         The :class:`Verdict`.
@@ -116,7 +127,11 @@ def judge(
         "checkpoint": load_policy(checkpoint, name="checkpoint", candidates=candidates,
                                   torch_threads=None),
     }  # fmt: skip
-    results = evaluate(build_sim(spec), policies, list(seeds))
+    bar = tqdm(total=len(seeds), desc="verdict", unit="seed", disable=not progress)
+    with bar:
+        results = evaluate(
+            build_sim(spec), policies, list(seeds), on_seed=lambda done, _: bar.update(done - bar.n)
+        )  # fmt: skip
     diff = paired_difference(
         results[rule][metric], results["checkpoint"][metric], positive=BETTER[metric]
     )  # fmt: skip

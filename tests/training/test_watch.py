@@ -80,7 +80,7 @@ def test_a_warm_started_run_shows_every_phase_and_ends_with_its_verdict(
     cfg = train_cfg([*WARM, "verdict=true", "progress=true", f"output_dir={tmp_path}"])
     result = train(cfg, tmp_path)
     err = capsys.readouterr().err
-    for phase in ("rules:", "imitation:", "PPO:"):
+    for phase in ("rules:", "imitation:", "PPO:", "verdict:"):
         assert phase in err, f"no progress bar for {phase}"
     assert f"best_rule={result.rule} " in err
 
