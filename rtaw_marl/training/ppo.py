@@ -3,8 +3,9 @@
 :func:`train` builds the learner (networks, ClipPPOLoss, GAE, Adam), the collector over
 batched simulators and the evaluator, then loops: for each collected batch, GAE under
 ``no_grad``, ``epochs`` passes of shuffled minibatches, weight sync to the collector,
-and every ``selection.every_frames`` a greedy evaluation against MPDM on the selection seeds
-with checkpoints (last and best).
+and every ``selection.every_frames`` a greedy evaluation on the selection seeds against
+the rules, with checkpoints (last and best); at the end, the curve and the verdict:
+``best.pt`` against the best rule on the evaluation seeds.
 """
 
 from __future__ import annotations
