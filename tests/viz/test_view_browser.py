@@ -13,12 +13,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rtaw_marl.evaluation.evaluate import run_episode
-from rtaw_marl.policies import make_baseline
-from rtaw_marl.sim.builder import SimSpec, build_sim
 from rtaw_marl.sim.mapf.schedule import Schedule
 from rtaw_marl.viz.view import ViewEpisode, write_view
 from tests.viz.browser import browser_or_skip, chromium, open_view, severe_logs
+from tests.viz.episodes import played
 
 pytestmark = pytest.mark.system
 
@@ -30,19 +28,8 @@ STATE_RGB = {0: (0x8C, 0x8C, 0x8C), 1: (0x1F, 0x6F, 0xD1), 2: (0xE8, 0x71, 0x0A)
 
 @pytest.fixture(scope="module")
 def episodes(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, Schedule]]:
-    spec = SimSpec.of(
-        {"num_robots": 12, "num_tasks": 40, "queue_len": 6},
-        {"name": "A"},
-        {"name": "sipp"},
-        {"name": "designated"},
-    )
-    sim = build_sim(spec)
-    schedules, eps = {}, []
-    for name in POLICIES:
-        policy = make_baseline(name)
-        ttd = run_episode(sim, policy, SEED).ttd
-        schedules[name] = sim.schedule()
-        eps.append(ViewEpisode(name, schedules[name], {"TTD": ttd, "seed": SEED}))
+    sim, schedules, ttds = played(POLICIES, SEED)
+    eps = [ViewEpisode(n, schedules[n], {"TTD": ttds[n], "seed": SEED}) for n in POLICIES]
     path = tmp_path_factory.mktemp("view") / "view.html"
     write_view(path, sim.layout, eps, "test")
     return path, schedules

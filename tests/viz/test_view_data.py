@@ -8,7 +8,6 @@ import json
 import re
 import zlib
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
@@ -26,6 +25,7 @@ from rtaw_marl.viz.episode_data import (
     turn_codes,
 )
 from rtaw_marl.viz.view import ViewEpisode, fill, page, write_view
+from tests.viz.episodes import played
 
 pytestmark = pytest.mark.unit
 
@@ -232,31 +232,11 @@ def test_a_horizon_episode_shows_every_assigned_task(tmp_path: Path) -> None:
             assert schedule.positions[pickup, robot].tolist() == [ox, oy]
 
 
-def _played(policies: tuple[str, ...], seed: int) -> tuple[Any, dict[str, Schedule]]:
-    """Layout A, SIPP, 12 robots: each policy's schedule on one seed."""
-    from rtaw_marl.evaluation.evaluate import run_episode
-    from rtaw_marl.policies import make_baseline
-    from rtaw_marl.sim.builder import SimSpec, build_sim
-
-    spec = SimSpec.of(
-        {"num_robots": 12, "num_tasks": 40, "queue_len": 6},
-        {"name": "A"},
-        {"name": "sipp"},
-        {"name": "designated"},
-    )
-    sim = build_sim(spec)
-    schedules = {}
-    for name in policies:
-        run_episode(sim, make_baseline(name), seed)
-        schedules[name] = sim.schedule()
-    return sim, schedules
-
-
 def test_stream_task_ids_agree_between_two_episodes_of_one_seed() -> None:
     """Two policies on one seed: a task id names the same task (the same cells, the
     stream's) in both pages' rows, though the policies assign tasks in different orders
     (the rank of assignment, the old id, names different tasks)."""
-    sim, schedules = _played(("mpdm", "lookahead"), 3)
+    sim, schedules, _ = played(("mpdm", "lookahead"), 3)
     rows = {}
     for name, schedule in schedules.items():
         tasks = episode_arrays(sim.layout, schedule).tasks
@@ -277,14 +257,14 @@ def test_stream_task_ids_agree_between_two_episodes_of_one_seed() -> None:
 def test_a_saved_file_keeps_the_stream_ids(tmp_path: Path) -> None:
     """rtaw-render's LoRR output writes stream ids as its task ids; the reader keeps
     them: the page of the file and the page of the played episode agree."""
-    sim, schedules = _played(("mpdm",), 3)
+    sim, schedules, _ = played(("mpdm",), 3)
     schedule = schedules["mpdm"]
     assert schedule.task_ids is not None
     back = read_schedule(write_episode(schedule, tmp_path / "e.json"), sim.layout)
-    played = episode_arrays(sim.layout, schedule).tasks
+    shown = episode_arrays(sim.layout, schedule).tasks
     saved = episode_arrays(sim.layout, back).tasks
-    assert np.array_equal(np.sort(saved[:, 9]), np.sort(played[:, 9]))
-    by_id = {int(r[9]): r.tolist() for r in played}
+    assert np.array_equal(np.sort(saved[:, 9]), np.sort(shown[:, 9]))
+    by_id = {int(r[9]): r.tolist() for r in shown}
     for r in saved:
         assert r.tolist() == by_id[int(r[9])]
 
