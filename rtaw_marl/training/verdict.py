@@ -10,7 +10,7 @@ else: by total travel delay, or by tasks finished in fixed-horizon episodes.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,6 +25,7 @@ except ModuleNotFoundError as exc:
     raise missing_extra(exc, __name__, "train") from None
 
 from rtaw_marl.evaluation.evaluate import evaluate
+from rtaw_marl.evaluation.metric_goals import metric_goal
 from rtaw_marl.evaluation.stats import PairedDiff, paired_difference
 from rtaw_marl.policies import BaselinesConfig, make_baseline
 from rtaw_marl.policies.network import load_policy
@@ -32,9 +33,6 @@ from rtaw_marl.scenarios import EVAL_SEEDS
 from rtaw_marl.sim.builder import SimSpec, build_sim
 
 __all__ = ["Verdict", "judge"]
-
-#: The metrics a verdict is on, with the direction that is better.
-BETTER: Mapping[str, str] = {"ttd": "lower", "tasks_finished": "higher"}
 
 
 @dataclass(frozen=True)
@@ -132,7 +130,8 @@ def judge(
         results = evaluate(
             build_sim(spec), policies, list(seeds), on_seed=lambda done, _: bar.update(done - bar.n)
         )  # fmt: skip
-    diff = paired_difference(
-        results[rule][metric], results["checkpoint"][metric], positive=BETTER[metric]
-    )  # fmt: skip
+    goal = metric_goal(metric)
+    if goal is None:
+        raise ValueError(f"a verdict is on a metric with a better side, not {metric!r}")
+    diff = paired_difference(results[rule][metric], results["checkpoint"][metric], positive=goal)
     return Verdict(Path(checkpoint), rule, tuple(chosen_on), metric, tuple(seeds), diff)

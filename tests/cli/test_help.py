@@ -91,7 +91,7 @@ def test_every_command_has_its_own_help(app: str, cli) -> None:
     assert "powered by Hydra" not in result.out
     for group in app_groups(app):
         assert group in GROUP_DOCS, f"add a line for {group!r} to GROUP_DOCS"
-    assert set(app_groups(app)) <= set(GROUPS) | {"scenario", "row", "experiment", "zoo"}
+    assert set(app_groups(app)) <= set(GROUPS) | {"scenario", "row", "experiment", "zoo", "recipe"}
 
 
 def test_shell_completion_install_prints_the_script(cli) -> None:
