@@ -12,6 +12,7 @@ from benchmarks.analysis.decisions import LOOKAHEAD
 from benchmarks.analysis.summary import Summary
 from benchmarks.tables import percent
 from rtaw_marl.evaluation.report import markdown_table
+from rtaw_marl.sim.inputs import seed_span as _span
 
 __all__ = ["choices_table", "findings", "section", "situations_table"]
 
@@ -175,11 +176,7 @@ def findings(summaries: Sequence[Summary]) -> list[str]:
 # --------------------------------------------------------------------------- section
 def seed_span(seeds: Sequence[int]) -> str:
     """``seed 0``, ``seeds 0-19`` or ``seeds 3, 5, 8``."""
-    if len(seeds) == 1:
-        return f"seed {seeds[0]}"
-    if list(seeds) == list(range(seeds[0], seeds[0] + len(seeds))):
-        return f"seeds {seeds[0]}-{seeds[-1]}"
-    return "seeds " + ", ".join(map(str, seeds))
+    return f"seed{'s' if len(seeds) > 1 else ''} {_span(seeds)}"
 
 
 def section(

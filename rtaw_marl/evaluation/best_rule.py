@@ -23,7 +23,7 @@ from rtaw_marl.evaluation.evaluate import evaluate
 from rtaw_marl.policies import BaselinesConfig, make_baseline
 from rtaw_marl.scenarios import EVAL_SEEDS
 from rtaw_marl.sim.core import WarehouseSim
-from rtaw_marl.sim.inputs import seed_list
+from rtaw_marl.sim.inputs import seed_list, seed_span
 
 __all__ = ["BEST", "DEFAULT_RULES", "SELECTION_SEEDS", "BestRule", "choose_best_rule"]
 
@@ -60,7 +60,7 @@ class BestRule:
     def line(self) -> str:
         """One line for a report: the choice and every rule's score."""
         scores = ", ".join(f"{rule} {score:,.1f}" for rule, score in self.scores.items())
-        span = f"{self.seeds[0]}-{self.seeds[-1]}" if len(self.seeds) > 1 else str(self.seeds[0])
+        span = seed_span(self.seeds)
         return f"best rule on selection seeds {span}: {self.name} (mean {self.metric}: {scores})"
 
     def as_dict(self) -> dict[str, Any]:

@@ -34,6 +34,7 @@ from rtaw_marl.evaluation.combine import Combined, Row
 from rtaw_marl.evaluation.metric_goals import difference_wording, metric_label
 from rtaw_marl.evaluation.report import baseline_label
 from rtaw_marl.evaluation.stats import mean_ci
+from rtaw_marl.sim.inputs import seed_span
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -144,15 +145,8 @@ def seeds_text(rows: Sequence[Row]) -> str:
         counts = sorted({len(s) for s in distinct})
         span = f"{counts[0]}-{counts[-1]}" if len(counts) > 1 else f"{counts[0]}"
         return f"seeds differ by setting, n={span}"
-    seeds = sorted(distinct.pop())
-    runs: list[list[int]] = []
-    for seed in seeds:
-        if runs and seed == runs[-1][-1] + 1:
-            runs[-1].append(seed)
-        else:
-            runs.append([seed])
-    spans = [f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs]
-    return f"seed{'s' if len(seeds) > 1 else ''} {', '.join(spans)}, n={len(seeds)}"
+    seeds = distinct.pop()
+    return f"seed{'s' if len(seeds) > 1 else ''} {seed_span(seeds)}, n={len(seeds)}"
 
 
 def _title(combined: Combined, confidence: float) -> str:

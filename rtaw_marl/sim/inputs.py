@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import operator
 from collections import Counter
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -21,6 +22,7 @@ __all__ = [
     "TRAINING_SEED_END",
     "draw_training_seed",
     "seed_list",
+    "seed_span",
     "seed_value",
     "slot_index",
     "training_seed",
@@ -111,6 +113,18 @@ def seed_value(seed: object, name: str = "seed") -> int:
     if value is None or value < 0:
         raise ConfigError(f"{name} must be an integer >= 0, got {_describe(seed)}")
     return value
+
+
+def seed_span(seeds: Sequence[int]) -> str:
+    """Seeds for a line of text: ``0-19``, ``3, 5, 8``, ``0-9, 20-29``: runs of three or
+    more consecutive seeds joined, in sorted order."""
+    runs: list[list[int]] = []
+    for seed in sorted(seeds):
+        if runs and seed == runs[-1][-1] + 1:
+            runs[-1].append(seed)
+        else:
+            runs.append([seed])
+    return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs)
 
 
 def seed_list(seeds: object, name: str = "seeds") -> list[int]:

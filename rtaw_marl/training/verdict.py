@@ -31,6 +31,7 @@ from rtaw_marl.policies import BaselinesConfig, make_baseline
 from rtaw_marl.policies.network import load_policy
 from rtaw_marl.scenarios import EVAL_SEEDS
 from rtaw_marl.sim.builder import SimSpec, build_sim
+from rtaw_marl.sim.inputs import seed_span
 
 __all__ = ["Verdict", "judge"]
 
@@ -70,8 +71,8 @@ class Verdict:
         noise = " (a tie within the noise)" if self.outcome == "does not beat" else ""
         return (
             f"verdict: {self.checkpoint.name} {self.outcome} {self.rule}{noise} (the best rule "
-            f"on selection seeds {_span(self.chosen_on)}) on evaluation seeds "
-            f"{_span(self.seeds)}: {what} {d.other_mean:,.1f} against {d.baseline_mean:,.1f}, "
+            f"on selection seeds {seed_span(self.chosen_on)}) on evaluation seeds "
+            f"{seed_span(self.seeds)}: {what} {d.other_mean:,.1f} against {d.baseline_mean:,.1f}, "
             f"a gain of {d.pct:+.1f}%{interval} (paired, {d.confidence:.0%} interval)"
         )
 
@@ -83,14 +84,6 @@ class Verdict:
             "seeds": list(self.seeds), "outcome": self.outcome, "line": self.line(),
             "difference": self.diff.as_dict(),
         }  # fmt: skip
-
-
-def _span(seeds: Sequence[int]) -> str:
-    """``0-19`` for a run of seeds, else the list."""
-    seeds = list(seeds)
-    if seeds == list(range(seeds[0], seeds[0] + len(seeds))) and len(seeds) > 1:
-        return f"{seeds[0]}-{seeds[-1]}"
-    return ", ".join(map(str, seeds))
 
 
 def judge(

@@ -36,7 +36,7 @@ WARM = [
 
 def _verdict(baseline: list[float], other: list[float]) -> Verdict:
     diff = paired_difference(baseline, other)
-    return Verdict(Path("best.pt"), "hungarian", (1000, 1001), "ttd", (0, 1, 2, 3), diff)
+    return Verdict(Path("best.pt"), "hungarian", (1000, 1001, 1002), "ttd", (0, 1, 2, 3), diff)
 
 
 def test_the_verdict_says_beats_loses_or_ties_by_the_interval() -> None:
@@ -44,7 +44,7 @@ def test_the_verdict_says_beats_loses_or_ties_by_the_interval() -> None:
     better = _verdict(rule, [90.0, 101.0, 109.0, 118.0])
     assert better.outcome == "beats"
     assert better.line().startswith("verdict: best.pt beats hungarian (the best rule on ")
-    assert "selection seeds 1000-1001) on evaluation seeds 0-3: TTD" in better.line()
+    assert "selection seeds 1000-1002) on evaluation seeds 0-3: TTD" in better.line()
     assert better.diff.pct_low is not None
     assert better.diff.pct_low > 0
     assert "TTD 104.5 against 115.0, a gain of +9.1% [+7.3, +10.9]" in better.line()
